@@ -1,0 +1,107 @@
+// Set 0: the scene, shared by every pass. Buffers use scalar layout so the Rust structs in
+// src/render/scene_gpu.rs match them byte for byte (see the `gpu_layout` test there).
+#ifndef SCENE_GLSL
+#define SCENE_GLSL
+
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_nonuniform_qualifier : require
+
+struct Vertex {
+    vec3 position;
+    vec3 normal;
+    vec4 tangent;
+    vec2 uv0;
+    vec2 uv1;
+};
+
+struct MeshInfo {
+    uint first_index;
+    uint index_count;
+    int base_vertex;
+    uint material;
+};
+
+#define INSTANCE_ALPHA_MASKED 1u
+
+struct InstanceInfo {
+    mat4 object_to_world;
+    mat4 prev_object_to_world;
+    mat4 normal_to_world; // inverse transpose of object_to_world (upper 3x3 used)
+    uint mesh;
+    uint material;
+    uint flags;
+    uint pad;
+};
+
+// Material texture slots.
+#define TEX_BASE_COLOR 0
+#define TEX_METAL_ROUGH 1
+#define TEX_NORMAL 2
+#define TEX_OCCLUSION 3
+#define TEX_EMISSIVE 4
+
+#define MATERIAL_DOUBLE_SIDED 1u
+
+struct MaterialInfo {
+    vec4 base_color_factor;
+    vec3 emissive_factor;
+    float alpha_cutoff; // negative: opaque
+    float metallic;
+    float roughness;
+    float normal_scale;
+    float occlusion_strength;
+    int tex[5];         // texture index per slot, -1 when absent
+    uint uv_sets;       // bit i set: slot i reads TEXCOORD_1
+    uint flags;
+    uint pad;
+    vec4 uv_xform[10];  // per slot two rows of the 2x3 KHR_texture_transform matrix
+};
+
+#define LIGHT_DIRECTIONAL 0u
+#define LIGHT_POINT 1u
+#define LIGHT_SPOT 2u
+
+struct LightInfo {
+    vec3 position;
+    uint type;
+    vec3 direction;  // direction the light travels (spot, directional)
+    float range;     // <= 0: infinite
+    vec3 intensity;  // colour * intensity
+    float radius;
+    float cos_inner;
+    float cos_outer;
+    uint pad0;
+    uint pad1;
+};
+
+layout(set = 0, binding = 0, scalar) uniform FrameUniforms {
+    mat4 view;
+    mat4 proj;
+    mat4 view_proj;
+    mat4 inv_view_proj;
+    mat4 inv_view;
+    mat4 prev_view_proj;
+    mat4 jittered_view_proj;
+    vec3 camera_pos;
+    float znear;
+    vec3 prev_camera_pos;
+    float zfar;
+    uvec2 size;
+    uint frame_index;
+    uint light_count;
+    vec2 jitter;
+    float time;
+    float exposure;
+    vec3 sky_color;
+    uint instance_count;
+} frame;
+
+layout(set = 0, binding = 1, scalar) readonly buffer Vertices { Vertex vertices[]; };
+layout(set = 0, binding = 2, scalar) readonly buffer Indices { uint indices[]; };
+layout(set = 0, binding = 3, scalar) readonly buffer Meshes { MeshInfo meshes[]; };
+layout(set = 0, binding = 4, scalar) readonly buffer Instances { InstanceInfo instances[]; };
+layout(set = 0, binding = 5, scalar) readonly buffer Materials { MaterialInfo materials[]; };
+layout(set = 0, binding = 6, scalar) readonly buffer Lights { LightInfo lights[]; };
+layout(set = 0, binding = 7) uniform sampler2D textures[];
+
+#endif

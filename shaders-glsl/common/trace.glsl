@@ -1,0 +1,73 @@
+// The trace interface. Every ray-traced pass includes this file and is compiled twice:
+//   RT_RAY_QUERY   : rayQueryEXT against the TLAS/BLAS (VK_KHR_ray_query);
+//   RT_COMPUTE_BVH : a stack traversal of the project's own two-level BVH (bvh_traverse.glsl).
+// Both report the same hits: instance = the instance id (custom index), primitive = triangle
+// index in the mesh's index buffer, t along the (unnormalised) direction, barycentrics of
+// vertices 1 and 2, and whether the triangle was seen counter-clockwise (front face).
+// Candidates on alpha-masked instances pass through hit_alpha_accept (hit.glsl).
+#ifndef TRACE_GLSL
+#define TRACE_GLSL
+
+#include "hit.glsl"
+
+#define RAY_MASK_ALL 0xffu
+#define NO_HIT 0xffffffffu
+
+struct Hit {
+    uint instance;  // NO_HIT when nothing was hit
+    uint primitive;
+    float t;
+    vec2 bary;
+    bool front_face;
+};
+
+#if defined(RT_RAY_QUERY)
+
+#extension GL_EXT_ray_query : require
+layout(set = 0, binding = 8) uniform accelerationStructureEXT scene_tlas;
+
+// Runs a query to completion, confirming alpha-masked candidates that pass the alpha test.
+// (A macro: GLSL cannot pass a rayQueryEXT to a function as inout.)
+#define TRACE_RUN(q)                                                                              \
+    while (rayQueryProceedEXT(q)) {                                                               \
+        if (rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT) { \
+            uint cand_inst = rayQueryGetIntersectionInstanceCustomIndexEXT(q, false);             \
+            uint cand_prim = rayQueryGetIntersectionPrimitiveIndexEXT(q, false);                  \
+            vec2 cand_bary = rayQueryGetIntersectionBarycentricsEXT(q, false);                    \
+            if (hit_alpha_accept(cand_inst, cand_prim, cand_bary)) rayQueryConfirmIntersectionEXT(q); \
+        }                                                                                         \
+    }
+
+bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsTerminateOnFirstHitEXT, mask, origin, tmin, dir, tmax);
+    TRACE_RUN(q);
+    return rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
+}
+
+Hit trace_closest(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsNoneEXT, mask, origin, tmin, dir, tmax);
+    TRACE_RUN(q);
+    Hit h;
+    if (rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionTriangleEXT) {
+        h.instance = NO_HIT;
+        return h;
+    }
+    h.instance = rayQueryGetIntersectionInstanceCustomIndexEXT(q, true);
+    h.primitive = rayQueryGetIntersectionPrimitiveIndexEXT(q, true);
+    h.t = rayQueryGetIntersectionTEXT(q, true);
+    h.bary = rayQueryGetIntersectionBarycentricsEXT(q, true);
+    h.front_face = rayQueryGetIntersectionFrontFaceEXT(q, true);
+    return h;
+}
+
+#elif defined(RT_COMPUTE_BVH)
+
+#include "bvh_traverse.glsl"
+
+#else
+#error "compile with RT_RAY_QUERY or RT_COMPUTE_BVH"
+#endif
+
+#endif

@@ -1,0 +1,45 @@
+#version 460
+// composite: shades every G-buffer pixel with direct light from the punctual lights (shadowed
+// by shadows.visibility for the first four) and adds emission; pixels that hit nothing show the
+// sky colour. Output is linear HDR radiance.
+#extension GL_GOOGLE_include_directive : require
+#include "common/scene.glsl"
+#include "common/brdf.glsl"
+#include "common/lights.glsl"
+#include "common/gbuffer.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, r32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_base_color;
+layout(set = 1, binding = 3, rgba8) uniform readonly image2D g_metal_rough;
+layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_emissive;
+layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 6, rgba16f) uniform readonly image2D shadow_visibility;
+layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_color;
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    uvec2 ids = imageLoad(g_ids, px).xy;
+    if (ids.x == NO_INSTANCE) {
+        imageStore(out_color, px, vec4(frame.sky_color, 1.0));
+        return;
+    }
+    float depth = imageLoad(g_depth, px).r;
+    vec3 p = world_position(px, depth);
+    vec3 n = imageLoad(g_normal, px).xyz;
+    vec3 v = normalize(frame.camera_pos - p);
+    vec4 mr = imageLoad(g_metal_rough, px);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
+
+    vec4 vis = imageLoad(shadow_visibility, px);
+    vec3 radiance = imageLoad(g_emissive, px).rgb;
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        LightSample ls = sample_punctual(lights[i], p);
+        float v_i = i < 4u ? vis[i] : 1.0;
+        radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * v_i;
+    }
+    imageStore(out_color, px, vec4(radiance, 1.0));
+}

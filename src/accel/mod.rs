@@ -1,0 +1,95 @@
+//! The two ray backends behind one trait. Both take the scene's meshes and instances and
+//! provide what `shaders-glsl/common/trace.glsl` binds in set 0 (bindings 8 and up):
+//!
+//! - [`hardware`]: one BLAS per mesh and a TLAS through VK_KHR_acceleration_structure, traced
+//!   with VK_KHR_ray_query;
+//! - [`compute`]: the project's own BVH ([`bvh`]), built on the CPU, traversed in GLSL.
+//!
+//! Instances that move only touch the top level: the TLAS is rebuilt, or the top-level BVH is
+//! rebuilt on the CPU and re-uploaded (bytes grow with instances, not triangles).
+
+pub mod bvh;
+mod compute;
+mod hardware;
+
+use crate::backend::Backend;
+use crate::gpu::{Binding, Buffer, CommandPool, Context, DescriptorSet, Recorder};
+use crate::scene::{Pose, Scene};
+use anyhow::Result;
+use std::sync::Arc;
+
+/// First set-0 binding owned by the ray backend.
+pub const FIRST_BINDING: u32 = 8;
+
+/// Sizes and times of the structures, for `info`, the bench and the logs.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct AccelStats {
+    /// Wall time to build all bottom levels (ms).
+    pub blas_build_ms: f64,
+    /// Device memory of the bottom levels (bytes).
+    pub blas_bytes: u64,
+    /// Bottom-level bytes before compaction (equal when not compacted).
+    pub blas_bytes_uncompacted: u64,
+    /// Device memory of the top level (bytes).
+    pub tlas_bytes: u64,
+    /// Bytes uploaded per top-level rebuild.
+    pub upload_bytes_per_update: u64,
+    pub top_level_rebuilds: u64,
+}
+
+pub trait RayAccel {
+    fn backend(&self) -> Backend;
+    /// The set-0 bindings the trace interface reads, from [`FIRST_BINDING`] on.
+    fn bindings(&self) -> Vec<Binding>;
+    fn write_set(&self, set: &DescriptorSet);
+    /// Host side of a new pose: instance transforms changed (no-op when nothing moved).
+    fn update_instances(&mut self, scene: &Scene, pose: &Pose) -> Result<()>;
+    /// GPU side: records whatever makes the structures current (the TLAS build).
+    fn record_update(&mut self, rec: &Recorder) -> Result<()>;
+    fn stats(&self) -> AccelStats;
+}
+
+/// The scene's pooled geometry, as uploaded for the raster and shading passes.
+pub struct Geometry<'a> {
+    pub vertices: &'a Buffer,
+    pub indices: &'a Buffer,
+    /// Per mesh: first index, base vertex.
+    pub ranges: Vec<(u32, i32)>,
+}
+
+pub fn create(
+    backend: Backend,
+    ctx: &Arc<Context>,
+    pool: &CommandPool,
+    scene: &Scene,
+    pose: &Pose,
+    geometry: &Geometry,
+) -> Result<Box<dyn RayAccel>> {
+    Ok(match backend {
+        Backend::RayQuery => Box::new(hardware::HardwareAccel::new(ctx, pool, scene, pose, geometry)?),
+        Backend::Compute => Box::new(compute::ComputeAccel::new(ctx, pool, scene, pose)?),
+    })
+}
+
+/// Reorders every mesh's triangles along a Morton curve of their centroids. Both backends see
+/// the same order, so their primitive ids agree; lavapipe's BLAS builder, which splits the
+/// triangle list by index, needs it to build a usable tree (PLATFORM-NOTES.md).
+pub fn sort_triangles_spatially(scene: &mut Scene) {
+    for mesh in &mut scene.meshes {
+        let positions: Vec<glam::Vec3> = mesh.vertices.iter().map(|v| glam::Vec3::from(v.position)).collect();
+        let order = bvh::morton_order(&positions, &mesh.indices);
+        let sorted: Vec<u32> = order
+            .iter()
+            .flat_map(|&t| {
+                let i = 3 * t as usize;
+                [mesh.indices[i], mesh.indices[i + 1], mesh.indices[i + 2]]
+            })
+            .collect();
+        mesh.indices = sorted;
+    }
+}
+
+/// Whether two poses place every instance identically (then the top level stays as it is).
+fn same_instances(scene: &Scene, a: &Pose, b: &Pose) -> bool {
+    scene.instances.iter().all(|i| a.world[i.node as usize] == b.world[i.node as usize])
+}

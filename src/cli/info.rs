@@ -1,0 +1,38 @@
+//! `hybrid-rt info`: the device, what it can do, and the ray backend `auto` picks and why.
+
+use super::GpuArgs;
+use crate::backend;
+use crate::gpu::{Context, ContextOptions};
+use anyhow::Result;
+use clap::Args;
+
+#[derive(Args)]
+pub struct InfoArgs {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: &InfoArgs) -> Result<()> {
+    let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
+    let caps = &ctx.caps;
+    let (picked, why) = backend::resolve(caps, a.gpu.backend)?;
+    if a.json {
+        let v = serde_json::json!({ "device": caps, "backend": picked, "reason": why });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        println!("device:                   {} ({})", caps.device_name, caps.device_type);
+        println!("driver:                   {}", caps.driver);
+        println!("Vulkan:                   {}", caps.api_version);
+        println!("acceleration structures:  {}", yes(caps.acceleration_structure));
+        println!("ray query:                {}", yes(caps.ray_query));
+        println!("buffer device address:    {}", yes(caps.buffer_device_address));
+        println!("deferred host operations: {}", yes(caps.deferred_host_operations));
+        println!("timestamps:               {}", if caps.timestamp_period_ns > 0.0 { "yes" } else { "no" });
+        println!("ray backend:              {} ({why})", picked.variant());
+    }
+    super::finish_validation(ctx)
+}

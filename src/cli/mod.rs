@@ -1,0 +1,129 @@
+//! The command line: `hybrid-rt render | info | ...`. Each subcommand lives in its own file;
+//! this one holds the shared arguments and turns errors into a message and a non-zero exit.
+
+mod bench;
+mod info;
+mod render;
+
+use crate::backend::BackendChoice;
+use crate::scene::{self, LoadOptions, Scene};
+use anyhow::{Result, bail};
+use clap::{Args, Parser, Subcommand};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "hybrid-rt", version, about = "A Vulkan hybrid ray-tracing renderer")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render frames of a scene to a PNG (tonemapped sRGB) or EXR (linear HDR) image.
+    Render(render::RenderArgs),
+    /// Show the Vulkan device, its ray-tracing capabilities and the backend `auto` picks.
+    Info(info::InfoArgs),
+    /// Benchmarks (see `hybrid-rt bench --help`).
+    Bench(bench::BenchArgs),
+}
+
+/// Arguments every GPU command takes.
+#[derive(Args, Clone, Debug)]
+pub struct GpuArgs {
+    /// Ray backend for the ray-traced passes.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
+    /// Run with the Khronos validation layer (synchronization validation on); any message it
+    /// prints makes the command fail.
+    #[arg(long)]
+    pub validate: bool,
+}
+
+/// Arguments of commands that load a scene.
+#[derive(Args, Clone, Debug)]
+pub struct SceneArgs {
+    /// A .gltf or .glb file, or `builtin:NAME`; the project's Cornell box when omitted.
+    pub scene: Option<String>,
+    /// Allow the scene's URIs to reach files outside the scene's folder.
+    #[arg(long)]
+    pub allow_outside_uris: bool,
+}
+
+impl SceneArgs {
+    pub fn load(&self) -> Result<Scene> {
+        let opts = LoadOptions { allow_outside_uris: self.allow_outside_uris, ..Default::default() };
+        match &self.scene {
+            Some(s) => load_scene(s, &opts),
+            None => load_scene(&default_scene_path().to_string_lossy(), &opts),
+        }
+    }
+}
+
+/// The built-in default scene (assets/default/cornell.gltf).
+pub fn default_scene_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default/cornell.gltf")
+}
+
+/// Loads a scene file or a built-in scene (`builtin:NAME`).
+pub fn load_scene(spec: &str, opts: &LoadOptions) -> Result<Scene> {
+    if let Some(name) = spec.strip_prefix("builtin:") {
+        return scene::builtin::by_name(name);
+    }
+    let scene = scene::load_gltf(Path::new(spec), opts)?;
+    Ok(scene)
+}
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let parsed = s.split_once(['x', 'X']).and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
+    match parsed {
+        Some((w, h)) if w > 0 && h > 0 => Ok((w, h)),
+        _ => bail!("--size {s}: expected WIDTHxHEIGHT with positive integers, e.g. 640x360"),
+    }
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(a) => render::run(&a),
+        Command::Info(a) => info::run(&a),
+        Command::Bench(a) => bench::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Drops the context (tearing down the device, which is when leaks are reported), then fails
+/// when the validation layer printed anything.
+pub fn finish_validation(ctx: std::sync::Arc<crate::gpu::Context>) -> Result<()> {
+    let log = ctx.validation.clone();
+    drop(ctx);
+    let n = log.count();
+    if n > 0 {
+        bail!("the Vulkan validation layer reported {n} message(s) (see above)");
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr for long work; hidden when stderr is not a terminal or the work
+/// is a single step.
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if len <= 1 || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    let style = indicatif::ProgressStyle::with_template(&format!(
+        "{{bar:40}} {{pos}}/{{len}} {what} [{{elapsed_precise}} elapsed, {{eta}} left]"
+    ))
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar
+}

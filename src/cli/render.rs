@@ -1,0 +1,111 @@
+//! `hybrid-rt render`: renders N frames of a scene and writes the last one; optionally dumps
+//! every pass's outputs.
+
+use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
+use crate::backend;
+use crate::capture::Capture;
+use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::image_io;
+use crate::render::{self, CameraChoice, Renderer, Settings};
+use anyhow::{Result, bail};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360")]
+    size: String,
+    /// Number of frames to render (animation advances 1/30 s per frame); the last is written.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Output image: .png (tonemapped sRGB) or .exr (linear HDR radiance).
+    #[arg(long, default_value = "out/render.png")]
+    out: PathBuf,
+    /// Scene camera by name or index (default: the first camera, or a framing camera).
+    #[arg(long)]
+    camera: Option<CameraChoice>,
+    /// Write every pass's named outputs (EXR + PNG + manifest.json) into this folder.
+    #[arg(long)]
+    dump_passes: Option<PathBuf>,
+    /// Frames to dump, 1-based, comma-separated (default: the last frame).
+    #[arg(long, value_delimiter = ',')]
+    dump_frames: Vec<u32>,
+    /// Exposure multiplier before tonemapping.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+    /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones.
+    #[arg(long)]
+    shader_dir: Option<PathBuf>,
+}
+
+pub fn run(a: &RenderArgs) -> Result<()> {
+    let (width, height) = parse_size(&a.size)?;
+    if a.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let ext = a.out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("png") | Some("exr")) {
+        bail!("{}: the output must end in .png or .exr", a.out.display());
+    }
+    image_io::check_overwrite(&a.out, a.force)?;
+    if let Some(bad) = a.dump_frames.iter().find(|&&f| f == 0 || f > a.frames) {
+        bail!("--dump-frames {bad}: frames are numbered 1..={}", a.frames);
+    }
+    let scene = a.scene.load()?;
+    let shaders = match &a.shader_dir {
+        Some(dir) => ShaderLibrary::from_dir(dir)?,
+        None => ShaderLibrary::embedded(),
+    };
+    let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
+    let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
+    log::info!("ray backend: {} ({why})", picked.variant());
+    let scene_name = scene.name.clone();
+    let settings = Settings { width, height, exposure: a.exposure, ..Default::default() };
+    let camera = a.camera.clone().unwrap_or_default();
+    let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &camera, picked)?;
+
+    let mut capture = match &a.dump_passes {
+        Some(dir) => Some(Capture::new(dir, !a.dump_frames.is_empty(), a.force, &scene_name, &ctx.caps.device_name)?),
+        None => None,
+    };
+    let bar = crate::cli::progress_bar(a.frames as u64, "frames");
+    for n in 1..=a.frames {
+        renderer.render_frame()?;
+        let dump_now = if a.dump_frames.is_empty() { n == a.frames } else { a.dump_frames.contains(&n) };
+        if let (Some(c), true) = (capture.as_mut(), dump_now) {
+            c.dump(&mut renderer)?;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    if ext.as_deref() == Some("exr") {
+        let img = renderer.read_output(render::HDR_OUTPUT)?;
+        image_io::write_exr(&a.out, &img, image_io::channel_names(img.channels))?;
+    } else {
+        let img = renderer.read_output(render::DISPLAY_OUTPUT)?;
+        let rgba: Vec<u8> = img.as_f32().unwrap_or(&[]).iter().map(|v| (v * 255.0).round() as u8).collect();
+        image_io::write_png_rgba8(&a.out, width, height, &rgba)?;
+    }
+    let gpu_ms: f64 = renderer.last_pass_times.iter().map(|t| t.gpu_ms).sum();
+    println!(
+        "wrote {} ({width}x{height}, {} frame(s), {} backend, last frame {gpu_ms:.2} ms GPU on {})",
+        a.out.display(),
+        a.frames,
+        picked.variant(),
+        ctx.caps.device_name
+    );
+    if let Some(c) = &capture {
+        println!("pass dumps in {} (manifest.json)", c.dir.display());
+    }
+    drop(renderer);
+    finish_validation(ctx)
+}

@@ -1,0 +1,121 @@
+//! Command recording and submission. The renderer records one command buffer per frame and
+//! waits on a fence; uploads use one-shot command buffers the same way.
+
+use super::Context;
+use anyhow::{Context as _, Result};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct CommandPool {
+    ctx: Arc<Context>,
+    pool: vk::CommandPool,
+    fence: vk::Fence,
+}
+
+impl CommandPool {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT | vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let pool = unsafe { ctx.device.create_command_pool(&info, None) }.context("create command pool")?;
+        let fence = match unsafe { ctx.device.create_fence(&vk::FenceCreateInfo::default(), None) } {
+            Ok(f) => f,
+            Err(e) => {
+                unsafe { ctx.device.destroy_command_pool(pool, None) };
+                return Err(e).context("create fence");
+            }
+        };
+        Ok(Self { ctx: ctx.clone(), pool, fence })
+    }
+
+    /// Records commands with `f`, submits them and waits for completion.
+    pub fn run<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> Result<R>) -> Result<R> {
+        let d = &self.ctx.device;
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { d.allocate_command_buffers(&info) }.context("allocate command buffer")?[0];
+        let result = (|| {
+            unsafe {
+                d.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+            }?;
+            let r = f(cmd)?;
+            unsafe { d.end_command_buffer(cmd) }?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            unsafe {
+                d.reset_fences(&[self.fence])?;
+                d.queue_submit(self.ctx.queue, &[submit], self.fence).context("vkQueueSubmit")?;
+                // A generous timeout: lavapipe is slow, but a GPU hang must not hang the program.
+                d.wait_for_fences(&[self.fence], true, 600_000_000_000).map_err(device_error)?;
+            }
+            Ok(r)
+        })();
+        unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        result
+    }
+}
+
+/// Turns a fence-wait failure into a message the user can act on.
+fn device_error(e: vk::Result) -> anyhow::Error {
+    match e {
+        vk::Result::ERROR_DEVICE_LOST => anyhow::anyhow!("the GPU device was lost (driver reset or crash)"),
+        vk::Result::TIMEOUT => anyhow::anyhow!("the GPU did not finish within 10 minutes (hang?)"),
+        other => anyhow::anyhow!("waiting for the GPU failed: {other}"),
+    }
+}
+
+impl Drop for CommandPool {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.ctx.device.queue_wait_idle(self.ctx.queue);
+            self.ctx.device.destroy_fence(self.fence, None);
+            self.ctx.device.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// A global memory barrier between two stage/access scopes (synchronization2).
+pub fn memory_barrier(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let b = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)];
+    let dep = vk::DependencyInfo::default().memory_barriers(&b);
+    ctx.cmd_pipeline_barrier2(cmd, &dep);
+}
+
+/// An image barrier with a layout transition.
+#[allow(clippy::too_many_arguments)]
+pub fn image_barrier(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let b = [vk::ImageMemoryBarrier2::default()
+        .image(image)
+        .subresource_range(range)
+        .old_layout(old)
+        .new_layout(new)
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)];
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&b);
+    ctx.cmd_pipeline_barrier2(cmd, &dep);
+}

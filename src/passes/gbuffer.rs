@@ -1,0 +1,115 @@
+//! gbuffer: the raster pass every other pass builds on (shaders-glsl/gbuffer.vert, .frag).
+//! Draws every instance once; masked texels are discarded; single-sided back faces too.
+
+use super::PassBuilder;
+use crate::gpu::{Pipeline, RasterDesc, vk};
+use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, Preview, Usage};
+use anyhow::Result;
+
+pub const NAME: &str = "gbuffer";
+
+/// The colour outputs in attachment order (matching `layout(location = N)` in gbuffer.frag),
+/// with their formats, previews and the clear value meaning "no surface".
+const OUTPUTS: [(&str, vk::Format, Preview); 8] = [
+    ("depth", vk::Format::R32_SFLOAT, Preview::Depth),
+    ("normal_geo", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
+    ("normal", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
+    ("base_color", vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
+    ("metal_rough", vk::Format::R8G8B8A8_UNORM, Preview::Color),
+    ("emissive", vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
+    ("motion", vk::Format::R32G32_SFLOAT, Preview::Motion),
+    ("ids", vk::Format::R32G32_UINT, Preview::Ids),
+];
+
+/// Instance and material id written where no surface was hit.
+pub const NO_ID: u32 = u32::MAX;
+
+struct Draw {
+    index_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    instance: u32,
+}
+
+pub struct GbufferPass {
+    pipeline: Pipeline,
+    draws: Vec<Draw>,
+}
+
+pub fn new(b: &PassBuilder) -> Result<GbufferPass> {
+    let vs = b.shaders.get("gbuffer.vert")?;
+    let fs = b.shaders.get("gbuffer.frag")?;
+    let formats: Vec<vk::Format> = OUTPUTS.iter().map(|o| o.1).collect();
+    let pipeline = Pipeline::raster(
+        b.ctx,
+        &RasterDesc {
+            name: NAME,
+            vertex: &vs,
+            fragment: &fs,
+            sets: &[&b.scene.set_layout],
+            push_constant_size: 0,
+            color_formats: &formats,
+            depth_format: vk::Format::D32_SFLOAT,
+        },
+    )?;
+    let draws = b
+        .scene
+        .instance_meshes
+        .iter()
+        .enumerate()
+        .map(|(i, &m)| {
+            let mesh = b.scene.mesh_table[m as usize];
+            Draw {
+                index_count: mesh.index_count,
+                first_index: mesh.first_index,
+                base_vertex: mesh.base_vertex,
+                instance: i as u32,
+            }
+        })
+        .collect();
+    Ok(GbufferPass { pipeline, draws })
+}
+
+pub fn output_name(output: &str) -> String {
+    format!("{NAME}.{output}")
+}
+
+impl Pass for GbufferPass {
+    fn desc(&self) -> PassDesc {
+        let mut outputs: Vec<OutputDesc> = OUTPUTS
+            .iter()
+            .map(|(n, f, p)| OutputDesc {
+                name: output_name(n),
+                format: *f,
+                usage: Usage::ColorAttachment,
+                preview: *p,
+            })
+            .collect();
+        outputs.push(OutputDesc {
+            name: output_name("zbuffer"),
+            format: vk::Format::D32_SFLOAT,
+            usage: Usage::DepthAttachment,
+            preview: Preview::Scalar,
+        });
+        PassDesc { name: NAME, raster: true, inputs: Vec::new(), outputs }
+    }
+
+    fn record(&mut self, ctx: &PassContext) -> Result<()> {
+        let rec = ctx.rec;
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let no_id = vk::ClearColorValue { uint32: [NO_ID; 4] };
+        let colors: Vec<_> = OUTPUTS
+            .iter()
+            .map(|(n, _, _)| (ctx.images.get(&output_name(n)), if *n == "ids" { no_id } else { zero }))
+            .collect();
+        rec.begin_rendering(ctx.extent, &colors, ctx.images.get(&output_name("zbuffer")));
+        rec.bind_pipeline(&self.pipeline);
+        rec.bind_scene_set(&self.pipeline, ctx.scene.set.raw);
+        rec.bind_index_buffer(&ctx.scene.indices);
+        for d in &self.draws {
+            rec.draw_indexed(d.index_count, d.first_index, d.base_vertex, d.instance);
+        }
+        rec.end_rendering();
+        Ok(())
+    }
+}

@@ -1,0 +1,139 @@
+//! The view: a camera pose and projection for one frame, from a glTF camera at the current
+//! animation pose or, when the scene has none, framed around the scene's bounds.
+
+use crate::scene::{Pose, Scene};
+use anyhow::{Result, bail};
+use glam::{Mat4, Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    /// World-to-view (right-handed, looking down -Z).
+    pub view: Mat4,
+    /// View-to-clip for Vulkan: depth in [0, 1], +Y down in the image (row 0 at the top).
+    pub proj: Mat4,
+    pub position: Vec3,
+    pub yfov: f32,
+    pub znear: f32,
+    pub zfar: f32,
+}
+
+impl View {
+    pub fn view_proj(&self) -> Mat4 {
+        self.proj * self.view
+    }
+
+    /// The projection shifted by `jitter` pixels (TAA), for an image of `size` pixels.
+    pub fn jittered_view_proj(&self, jitter: Vec2, size: Vec2) -> Mat4 {
+        let offset = Mat4::from_translation((jitter * 2.0 / size).extend(0.0));
+        offset * self.view_proj()
+    }
+
+    /// World-space ray direction through a pixel position (pixel centres at +0.5).
+    pub fn ray_dir(&self, pixel: Vec2, size: Vec2) -> Vec3 {
+        let ndc = pixel / size * 2.0 - 1.0;
+        let p = self.view_proj().inverse().project_point3(ndc.extend(1.0));
+        (p - self.position).normalize()
+    }
+
+    /// Pixel position of a world point (x right, y down, pixel centres at +0.5).
+    pub fn project(&self, p: Vec3, size: Vec2) -> Vec2 {
+        let ndc = self.view_proj().project_point3(p);
+        (ndc.truncate() * 0.5 + 0.5) * size
+    }
+}
+
+/// Which camera to use: by name or by index, or automatic.
+#[derive(Clone, Debug, Default)]
+pub enum CameraChoice {
+    /// The scene's first camera, or a framing camera when it has none.
+    #[default]
+    Default,
+    Index(usize),
+    Name(String),
+}
+
+impl std::str::FromStr for CameraChoice {
+    type Err = std::convert::Infallible;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.parse::<usize>() {
+            Ok(i) => CameraChoice::Index(i),
+            Err(_) => CameraChoice::Name(s.to_string()),
+        })
+    }
+}
+
+/// Resolves the camera choice to a scene camera index (None = automatic framing).
+pub fn resolve(scene: &Scene, choice: &CameraChoice) -> Result<Option<usize>> {
+    let names = || scene.cameras.iter().enumerate().map(|(i, c)| format!("{i}: '{}'", c.name)).collect::<Vec<_>>();
+    match choice {
+        CameraChoice::Default => Ok((!scene.cameras.is_empty()).then_some(0)),
+        CameraChoice::Index(i) if *i < scene.cameras.len() => Ok(Some(*i)),
+        CameraChoice::Index(i) => bail!(
+            "camera index {i} does not exist; the scene has {} camera(s): [{}]",
+            scene.cameras.len(),
+            names().join(", ")
+        ),
+        CameraChoice::Name(n) => match scene.cameras.iter().position(|c| &c.name == n) {
+            Some(i) => Ok(Some(i)),
+            None => bail!("no camera named '{n}'; the scene has [{}]", names().join(", ")),
+        },
+    }
+}
+
+/// The view at a pose for an output of aspect `aspect` (width / height).
+pub fn view_at(scene: &Scene, camera: Option<usize>, pose: &Pose, aspect: f32) -> View {
+    match camera {
+        Some(i) => {
+            let cam = &scene.cameras[i];
+            let world = pose.world[cam.node as usize];
+            // Scale in the camera's node would skew the view: keep rotation and translation only.
+            let (_, rotation, position) = world.to_scale_rotation_translation();
+            let view = Mat4::from_rotation_translation(rotation, position).inverse();
+            let zfar = cam.zfar.unwrap_or(f32::INFINITY);
+            perspective(view, position, cam.yfov, aspect, cam.znear, zfar)
+        }
+        None => framing_view(scene, pose, aspect),
+    }
+}
+
+/// A camera on the +Z side of the scene's bounds, seeing all of it.
+fn framing_view(scene: &Scene, pose: &Pose, aspect: f32) -> View {
+    let (lo, hi) = scene.bounds(pose);
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-3);
+    let yfov = 45f32.to_radians();
+    let half = (yfov * 0.5).min((yfov * 0.5 * aspect).atan().max(1e-3));
+    let dist = radius / half.sin();
+    let position = centre + Vec3::new(0.0, 0.25, 1.0).normalize() * dist;
+    let view = Mat4::look_at_rh(position, centre, Vec3::Y);
+    perspective(view, position, yfov, aspect, (dist - radius).max(dist * 1e-3), dist + radius * 2.0)
+}
+
+pub fn perspective(view: Mat4, position: Vec3, yfov: f32, aspect: f32, znear: f32, zfar: f32) -> View {
+    let mut proj = if zfar.is_finite() {
+        Mat4::perspective_rh(yfov, aspect, znear, zfar)
+    } else {
+        Mat4::perspective_infinite_rh(yfov, aspect, znear)
+    };
+    // Vulkan's image y points down; flipping clip y keeps row 0 at the top of the picture.
+    proj.y_axis.y = -proj.y_axis.y;
+    View { view, proj, position, yfov, znear, zfar }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projection_puts_up_at_the_top() {
+        let view = Mat4::look_at_rh(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y);
+        let v = perspective(view, Vec3::new(0.0, 0.0, 5.0), 1.0, 1.0, 0.1, 100.0);
+        let size = Vec2::splat(100.0);
+        let up = v.project(Vec3::new(0.0, 1.0, 0.0), size);
+        assert!(up.y < 50.0, "a point above the centre must be in the upper half, got {up}");
+        let right = v.project(Vec3::new(1.0, 0.0, 0.0), size);
+        assert!(right.x > 50.0);
+        let d = v.ray_dir(Vec2::new(50.0, 50.0), size);
+        assert!((d - Vec3::NEG_Z).length() < 1e-5);
+    }
+}

@@ -1,0 +1,222 @@
+//! The renderer: a scene on the GPU, the frame graph of passes, and the per-frame loop that
+//! advances animation, updates the camera and records, submits and times one frame.
+
+pub mod camera;
+mod mips;
+pub mod ray_batch;
+pub mod scene_gpu;
+
+pub use camera::{CameraChoice, View};
+pub use scene_gpu::{FrameUniforms, SceneGpu};
+
+use crate::backend::Backend;
+use crate::gpu::{CommandPool, Context, Recorder, ShaderLibrary, vk};
+use crate::graph::{Graph, Pass, PassTime};
+use crate::image_io::CpuImage;
+use crate::passes::{self, PassBuilder};
+use crate::scene::{Pose, Scene};
+use anyhow::{Result, bail};
+use glam::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// What the frame looks like, independent of the scene.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    /// Exposure multiplier applied before tonemapping.
+    pub exposure: f32,
+    /// Radiance of the constant sky seen where rays and pixels hit nothing.
+    pub sky: Vec3,
+    /// Animation time step between frames, seconds.
+    pub frame_dt: f32,
+    /// Animation time of frame 0, seconds.
+    pub start_time: f32,
+    /// Add the primary_rays pass (a check of the ray backends against the G-buffer).
+    pub primary_rays: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            width: 640,
+            height: 360,
+            exposure: 1.0,
+            sky: Vec3::splat(0.0),
+            frame_dt: 1.0 / 30.0,
+            start_time: 0.0,
+            primary_rays: false,
+        }
+    }
+}
+
+/// Names of the images a frame produces for display.
+pub const DISPLAY_OUTPUT: &str = passes::tonemap::COLOR;
+pub const HDR_OUTPUT: &str = passes::composite::COLOR;
+
+pub struct Renderer {
+    pub ctx: Arc<Context>,
+    pool: CommandPool,
+    pub scene: Scene,
+    pub scene_gpu: SceneGpu,
+    pub graph: Graph,
+    pub settings: Settings,
+    camera: Option<usize>,
+    /// Frames rendered so far; the next frame's index.
+    pub frame_index: u32,
+    prev_view: Option<View>,
+    pub last_view: Option<View>,
+    pub last_pass_times: Vec<PassTime>,
+}
+
+impl Renderer {
+    pub fn new(
+        ctx: &Arc<Context>,
+        shaders: &ShaderLibrary,
+        mut scene: Scene,
+        settings: Settings,
+        camera: &CameraChoice,
+        backend: Backend,
+    ) -> Result<Self> {
+        crate::accel::sort_triangles_spatially(&mut scene);
+        let limit = ctx.caps.max_image_dimension_2d;
+        if settings.width == 0 || settings.height == 0 || settings.width > limit || settings.height > limit {
+            bail!(
+                "image size {}x{} is outside what the device supports (1..={limit} per side)",
+                settings.width,
+                settings.height
+            );
+        }
+        let camera = camera::resolve(&scene, camera)?;
+        let pool = CommandPool::new(ctx)?;
+        let pose = scene.evaluate(settings.start_time);
+        let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend)?;
+        let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
+        let mut frame_passes: Vec<Box<dyn Pass>> = vec![Box::new(passes::gbuffer::new(&b)?)];
+        if settings.primary_rays {
+            frame_passes.push(Box::new(passes::primary_rays::new(&b)?));
+        }
+        frame_passes.push(Box::new(passes::shadows::new(&b)?));
+        frame_passes.push(Box::new(passes::composite::new(&b)?));
+        frame_passes.push(Box::new(passes::tonemap::new(&b, HDR_OUTPUT)?));
+        let extent = vk::Extent2D { width: settings.width, height: settings.height };
+        let graph = Graph::new(ctx, frame_passes, extent)?;
+        Ok(Self {
+            ctx: ctx.clone(),
+            pool,
+            scene,
+            scene_gpu,
+            graph,
+            settings,
+            camera,
+            frame_index: 0,
+            prev_view: None,
+            last_view: None,
+            last_pass_times: Vec::new(),
+        })
+    }
+
+    pub fn time_of(&self, frame: u32) -> f32 {
+        self.settings.start_time + frame as f32 * self.settings.frame_dt
+    }
+
+    pub fn pose_of(&self, frame: u32) -> Pose {
+        self.scene.evaluate(self.time_of(frame))
+    }
+
+    pub fn view_of(&self, pose: &Pose) -> View {
+        let aspect = self.settings.width as f32 / self.settings.height as f32;
+        camera::view_at(&self.scene, self.camera, pose, aspect)
+    }
+
+    /// Renders the next frame and waits for it.
+    pub fn render_frame(&mut self) -> Result<()> {
+        let frame = self.frame_index;
+        let pose = self.pose_of(frame);
+        let view = self.view_of(&pose);
+        self.scene_gpu.update_pose(&self.scene, &pose)?;
+        let uniforms = self.frame_uniforms(frame, pose.time, &view);
+        self.scene_gpu.write_frame(&uniforms)?;
+        let (graph, scene_gpu, ctx) = (&mut self.graph, &mut self.scene_gpu, &self.ctx);
+        self.pool.run(|cmd| {
+            let rec = Recorder::new(ctx, cmd);
+            scene_gpu.accel.record_update(&rec)?;
+            graph.record(&rec, scene_gpu, frame)
+        })?;
+        self.last_pass_times = self.graph.pass_times();
+        self.prev_view = Some(view);
+        self.last_view = Some(view);
+        self.frame_index += 1;
+        Ok(())
+    }
+
+    fn frame_uniforms(&self, frame: u32, time: f32, view: &View) -> FrameUniforms {
+        let size = Vec2::new(self.settings.width as f32, self.settings.height as f32);
+        let prev = self.prev_view.unwrap_or(*view);
+        let vp = view.view_proj();
+        FrameUniforms {
+            view: view.view.to_cols_array_2d(),
+            proj: view.proj.to_cols_array_2d(),
+            view_proj: vp.to_cols_array_2d(),
+            inv_view_proj: vp.inverse().to_cols_array_2d(),
+            inv_view: view.view.inverse().to_cols_array_2d(),
+            prev_view_proj: prev.view_proj().to_cols_array_2d(),
+            jittered_view_proj: view.jittered_view_proj(Vec2::ZERO, size).to_cols_array_2d(),
+            camera_pos: view.position.to_array(),
+            znear: view.znear,
+            prev_camera_pos: prev.position.to_array(),
+            zfar: view.zfar.min(f32::MAX),
+            size: [self.settings.width, self.settings.height],
+            frame_index: frame,
+            light_count: self.scene.lights.len() as u32,
+            jitter: [0.0; 2],
+            time,
+            exposure: self.settings.exposure,
+            sky_color: self.settings.sky.to_array(),
+            instance_count: self.scene.instances.len() as u32,
+        }
+    }
+
+    /// Reads named outputs of the last frame back to the CPU.
+    pub fn read_outputs(&mut self, names: &[&str]) -> Result<Vec<CpuImage>> {
+        for n in names {
+            if self.graph.image(n).is_none() {
+                bail!("no pass output named {n}");
+            }
+        }
+        let (graph, ctx) = (&mut self.graph, &self.ctx);
+        let buffers = self.pool.run(|cmd| {
+            let rec = Recorder::new(ctx, cmd);
+            graph.prepare_readback(&rec, names);
+            names
+                .iter()
+                .map(|n| crate::graph::copy_to_host(ctx, &rec, graph.image(n).expect("checked above")))
+                .collect::<Result<Vec<_>>>()
+        })?;
+        names
+            .iter()
+            .zip(buffers)
+            .map(|(n, buf)| {
+                let img = self.graph.image(n).expect("checked above");
+                let bytes = buf.mapped().ok_or_else(|| anyhow::anyhow!("read-back buffer is not mapped"))?;
+                CpuImage::from_raw(img.format, img.extent.width, img.extent.height, bytes)
+            })
+            .collect()
+    }
+
+    /// Traces a list of rays through the scene's ray backend (see [`ray_batch`]).
+    pub fn trace_rays(
+        &mut self,
+        shaders: &ShaderLibrary,
+        rays: &[crate::accel::bvh::rays::Ray],
+        any_hit: bool,
+        repeats: u32,
+    ) -> Result<(Vec<ray_batch::HitRecord>, Vec<f64>)> {
+        let batch = ray_batch::RayBatch::new(&self.ctx, shaders, &self.scene_gpu)?;
+        batch.trace(&self.ctx, &self.pool, &mut self.scene_gpu, rays, any_hit, repeats)
+    }
+
+    pub fn read_output(&mut self, name: &str) -> Result<CpuImage> {
+        Ok(self.read_outputs(&[name])?.remove(0))
+    }
+}

@@ -1,0 +1,291 @@
+//! Built-in scenes made in code, for tests with analytic answers and for quick looks. Each is
+//! reachable from the command line as `builtin:NAME`.
+
+use super::animation::{Channel, Interpolation, Property};
+use super::{Animation, Camera, Instance, Material, Mesh, Node, Scene, Vertex};
+use anyhow::{Result, bail};
+use glam::{Quat, Vec3, Vec4};
+
+/// Names accepted after `builtin:`.
+pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow"];
+
+pub fn by_name(name: &str) -> Result<Scene> {
+    match name {
+        "gbuffer-test" => Ok(gbuffer_test()),
+        "alpha-shadow" => Ok(alpha_shadow()),
+        _ => bail!("builtin:{name}: no such built-in scene (known: {})", NAMES.join(", ")),
+    }
+}
+
+/// Facts about `gbuffer_test` that tests check against.
+pub mod gbuffer_test_facts {
+    use glam::Vec3;
+    /// The camera sits at the origin looking down -Z with this vertical field of view.
+    pub const YFOV: f32 = std::f32::consts::FRAC_PI_3;
+    /// The back plane z = -PLANE_DISTANCE faces the camera.
+    pub const PLANE_DISTANCE: f32 = 10.0;
+    pub const SPHERE_CENTRE: Vec3 = Vec3::new(-1.2, 0.0, -5.0);
+    pub const SPHERE_RADIUS: f32 = 1.0;
+    /// The cube moves along +X at this speed (units per second), centred at x = 0 at t = 0.5.
+    pub const CUBE_SPEED: f32 = 2.0;
+    pub const CUBE_Y: f32 = 1.0;
+    pub const CUBE_Z: f32 = -4.0;
+    pub const CUBE_HALF: f32 = 0.25;
+    pub const PLANE_INSTANCE: u32 = 0;
+    pub const SPHERE_INSTANCE: u32 = 1;
+    pub const CUBE_INSTANCE: u32 = 2;
+}
+
+/// A back plane, a finely tessellated sphere and a cube that moves along +X: plane depth,
+/// sphere normals and motion vectors have closed-form answers.
+pub fn gbuffer_test() -> Scene {
+    use gbuffer_test_facts::*;
+    let mut s = Scene { name: "builtin:gbuffer-test".into(), ..Default::default() };
+    s.materials.push(Material {
+        name: "grey".into(),
+        metallic_factor: 0.0,
+        roughness_factor: 0.8,
+        ..Default::default()
+    });
+    s.meshes.push(quad(Vec3::new(0.0, 0.0, -PLANE_DISTANCE), Vec3::X * 40.0, Vec3::Y * 40.0, 0));
+    s.meshes.push(uv_sphere(SPHERE_RADIUS, 128, 64, 0));
+    s.meshes.push(cuboid(Vec3::splat(CUBE_HALF), 0));
+    s.nodes.push(node("plane", Vec3::ZERO));
+    s.nodes.push(node("sphere", SPHERE_CENTRE));
+    s.nodes.push(node("cube", Vec3::new(-CUBE_SPEED * 0.5, CUBE_Y, CUBE_Z)));
+    s.nodes.push(node("camera", Vec3::ZERO));
+    for i in 0..3 {
+        s.instances.push(Instance { mesh: i, node: i });
+    }
+    s.cameras.push(Camera {
+        name: "origin".into(),
+        yfov: YFOV,
+        aspect_ratio: None,
+        znear: 0.1,
+        zfar: Some(100.0),
+        node: 3,
+    });
+    s.lights.push(super::Light {
+        name: "sun".into(),
+        kind: super::LightKind::Directional,
+        color: Vec3::ONE,
+        intensity: 3.0,
+        range: None,
+        radius: 0.0,
+        node: 3,
+    });
+    s.animations.push(Animation {
+        name: "cube_slide".into(),
+        channels: vec![Channel {
+            node: 2,
+            property: Property::Translation,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values: vec![
+                Vec4::new(-CUBE_SPEED * 0.5, CUBE_Y, CUBE_Z, 0.0),
+                Vec4::new(CUBE_SPEED * 0.5, CUBE_Y, CUBE_Z, 0.0),
+            ],
+        }],
+    });
+    s
+}
+
+/// Facts about `alpha_shadow` that tests check against.
+pub mod alpha_shadow_facts {
+    /// The masked square spans x, z in [-HALF, HALF] at height MASK_Y.
+    pub const HALF: f32 = 1.0;
+    pub const MASK_Y: f32 = 1.0;
+    /// Checker cells per side of the mask texture; cell (i, j) is opaque when i + j is even.
+    pub const CELLS: u32 = 8;
+    pub const FLOOR_INSTANCE: u32 = 0;
+    pub const MASK_INSTANCE: u32 = 1;
+
+    /// Whether the mask is opaque above floor point (x, z) (the texture's checker, u along
+    /// +x and v along +z).
+    pub fn opaque_at(x: f32, z: f32) -> Option<bool> {
+        let (u, v) = ((x + HALF) / (2.0 * HALF), (z + HALF) / (2.0 * HALF));
+        if !(0.0..1.0).contains(&u) || !(0.0..1.0).contains(&v) {
+            return None;
+        }
+        let (i, j) = ((u * CELLS as f32) as u32, (v * CELLS as f32) as u32);
+        Some((i + j) % 2 == 0)
+    }
+}
+
+/// A floor lit straight from above by a directional light through an alpha-masked square
+/// whose texture is a checkerboard of opaque and fully transparent cells: the shadow on the
+/// floor must be the same checkerboard.
+pub fn alpha_shadow() -> Scene {
+    use alpha_shadow_facts::*;
+    let mut s = Scene { name: "builtin:alpha-shadow".into(), ..Default::default() };
+    let size = 64u32;
+    let cell = size / CELLS;
+    let mut rgba = Vec::with_capacity((size * size * 4) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            let opaque = (x / cell + y / cell) % 2 == 0;
+            rgba.extend_from_slice(&[200, 60, 40, if opaque { 255 } else { 0 }]);
+        }
+    }
+    s.images.push(super::Image { name: "checker_alpha".into(), width: size, height: size, rgba8: rgba });
+    s.textures.push(super::Texture {
+        image: Some(0),
+        sampler: super::Sampler {
+            mag_filter: super::Filter::Nearest,
+            min_filter: super::Filter::Nearest,
+            mipmaps: false,
+            wrap_s: super::Wrap::ClampToEdge,
+            wrap_t: super::Wrap::ClampToEdge,
+        },
+    });
+    s.materials.push(Material {
+        name: "floor".into(),
+        metallic_factor: 0.0,
+        roughness_factor: 1.0,
+        ..Default::default()
+    });
+    s.materials.push(Material {
+        name: "mask".into(),
+        metallic_factor: 0.0,
+        roughness_factor: 1.0,
+        base_color_texture: Some(super::TextureRef { texture: 0, uv_set: 0, transform: glam::Mat3::IDENTITY }),
+        alpha_mode: super::AlphaMode::Mask { cutoff: 0.5 },
+        double_sided: true,
+        ..Default::default()
+    });
+    // Floor facing +Y; the mask facing +Y with u along +x and v along +z.
+    s.meshes.push(quad(Vec3::ZERO, Vec3::Z * 8.0, Vec3::X * 8.0, 0));
+    let mut mask = quad(Vec3::new(0.0, MASK_Y, 0.0), Vec3::Z * (2.0 * HALF), Vec3::X * (2.0 * HALF), 1);
+    for v in &mut mask.vertices {
+        v.uv0 = [(v.position[0] + HALF) / (2.0 * HALF), (v.position[2] + HALF) / (2.0 * HALF)];
+        v.uv1 = v.uv0;
+    }
+    s.meshes.push(mask);
+    s.nodes.push(node("floor", Vec3::ZERO));
+    s.nodes.push(node("mask", Vec3::ZERO));
+    let mut eye = node("camera", Vec3::new(0.0, 6.0, 0.0));
+    eye.rotation = Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+    s.nodes.push(eye);
+    s.instances.push(Instance { mesh: 0, node: 0 });
+    s.instances.push(Instance { mesh: 1, node: 1 });
+    s.cameras.push(Camera {
+        name: "above".into(),
+        yfov: 0.9,
+        aspect_ratio: None,
+        znear: 0.1,
+        zfar: Some(50.0),
+        node: 2,
+    });
+    s.lights.push(super::Light {
+        name: "sun".into(),
+        kind: super::LightKind::Directional,
+        color: Vec3::ONE,
+        intensity: 2.0,
+        range: None,
+        radius: 0.0,
+        node: 2,
+    });
+    s
+}
+
+fn node(name: &str, t: Vec3) -> Node {
+    Node { name: name.into(), parent: None, translation: t, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+}
+
+fn vertex(p: Vec3, n: Vec3, t: Vec3, uv: [f32; 2]) -> Vertex {
+    Vertex { position: p.to_array(), normal: n.to_array(), tangent: t.extend(1.0).to_array(), uv0: uv, uv1: uv }
+}
+
+fn finish(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>, material: u32) -> Mesh {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for v in &vertices {
+        lo = lo.min(Vec3::from(v.position));
+        hi = hi.max(Vec3::from(v.position));
+    }
+    Mesh { name: name.into(), vertices, indices, material, bounds_min: lo, bounds_max: hi }
+}
+
+/// A parallelogram centred at `c` spanned by `u` and `v`, facing `u x v`.
+pub fn quad(c: Vec3, u: Vec3, v: Vec3, material: u32) -> Mesh {
+    let n = u.cross(v).normalize();
+    let t = u.normalize();
+    let corners = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)];
+    let vertices = corners.iter().map(|&(a, b)| vertex(c + u * a + v * b, n, t, [a + 0.5, 0.5 - b])).collect();
+    finish("quad", vertices, vec![0, 1, 2, 0, 2, 3], material)
+}
+
+/// A closed UV sphere centred at the origin, counter-clockwise seen from outside.
+pub fn uv_sphere(radius: f32, segments: u32, rings: u32, material: u32) -> Mesh {
+    let mut vertices = Vec::new();
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let t = Vec3::new(-phi.sin(), 0.0, -phi.cos());
+            vertices.push(vertex(n * radius, n, t, [s as f32 / segments as f32, r as f32 / rings as f32]));
+        }
+    }
+    let mut indices = Vec::new();
+    let row = segments + 1;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            if r > 0 {
+                indices.extend_from_slice(&[a, b, a + 1]);
+            }
+            if r + 1 < rings {
+                indices.extend_from_slice(&[a + 1, b, b + 1]);
+            }
+        }
+    }
+    finish("uv_sphere", vertices, indices, material)
+}
+
+/// An axis-aligned box centred at the origin with half extents `h`, faces pointing out.
+pub fn cuboid(h: Vec3, material: u32) -> Mesh {
+    let mut vertices = Vec::new();
+    let mut indices = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            let mut u = Vec3::ZERO;
+            u[(axis + 1) % 3] = 1.0;
+            let mut v = Vec3::ZERO;
+            v[(axis + 2) % 3] = 1.0;
+            if sign < 0.0 {
+                std::mem::swap(&mut u, &mut v);
+            }
+            let base = vertices.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                let p = (n + u * a + v * b) * h;
+                vertices.push(vertex(p, n, u, [(a + 1.0) * 0.5, (1.0 - b) * 0.5]));
+            }
+            indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+        }
+    }
+    finish("cuboid", vertices, indices, material)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every triangle's winding agrees with its vertex normals (front faces point outward).
+    fn check_winding(m: &Mesh) {
+        for t in m.indices.chunks(3) {
+            let p = |i: u32| Vec3::from(m.vertices[i as usize].position);
+            let ng = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
+            let n = Vec3::from(m.vertices[t[0] as usize].normal);
+            assert!(ng.dot(n) > 0.0, "{}: triangle {t:?} winds against its normal", m.name);
+        }
+    }
+
+    #[test]
+    fn generated_meshes_wind_outward() {
+        check_winding(&quad(Vec3::ZERO, Vec3::X, Vec3::Y, 0));
+        check_winding(&uv_sphere(1.0, 16, 8, 0));
+        check_winding(&cuboid(Vec3::ONE, 0));
+    }
+}
