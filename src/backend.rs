@@ -37,10 +37,10 @@ impl Backend {
 /// Picks the backend for a device and says why.
 pub fn resolve(caps: &Capabilities, choice: BackendChoice) -> Result<(Backend, String)> {
     let missing = || {
-        let mut m = Vec::new();
         if caps.ray_tracing_hidden {
-            m.push("ray tracing hidden by request (HYBRID_RT_HIDE_RAY_TRACING)");
+            return "ray tracing hidden by request (HYBRID_RT_HIDE_RAY_TRACING)".to_string();
         }
+        let mut m = Vec::new();
         if !caps.acceleration_structure {
             m.push("no VK_KHR_acceleration_structure");
         }

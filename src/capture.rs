@@ -17,6 +17,7 @@ pub struct ManifestEntry {
     pub format: String,
     pub width: u32,
     pub height: u32,
+    /// 1-based number of the frame.
     pub frame: u32,
     pub gpu_ms: Option<f64>,
     pub exr: String,
@@ -58,7 +59,8 @@ impl Capture {
 
     /// Dumps every output of the frame the renderer rendered last.
     pub fn dump(&mut self, r: &mut Renderer) -> Result<()> {
-        let frame = r.frame_index.saturating_sub(1);
+        // Frames are numbered from 1, as on the command line (--dump-frames).
+        let frame = r.frame_index;
         let folder = if self.per_frame_folders { self.dir.join(format!("frame_{frame:04}")) } else { self.dir.clone() };
         let names = r.graph.output_order.clone();
         let refs: Vec<&str> = names.iter().map(String::as_str).collect();

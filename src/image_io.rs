@@ -152,25 +152,20 @@ pub fn channel_names(channels: usize) -> &'static [&'static str] {
     }
 }
 
-/// Reads an RGB(A) float EXR (the first layer) as a 4-channel image.
-pub fn read_exr_rgba(path: &Path) -> Result<CpuImage> {
+/// Reads every channel of the first layer of an EXR (as written by [`write_exr`]) as f32,
+/// channels in the file's (alphabetical) order.
+pub fn read_exr_channels(path: &Path) -> Result<CpuImage> {
     use exr::prelude::*;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![0f32; res.width() * res.height() * 4]),
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            let i = (pos.y() * *w + pos.x()) * 4;
-            px[i..i + 4].copy_from_slice(&[r, g, b, a]);
-        },
-    )
-    .with_context(|| format!("{}: cannot read EXR", path.display()))?;
-    let size = image.layer_data.size;
-    let (_, px) = image.layer_data.channel_data.pixels;
-    Ok(CpuImage {
-        width: size.width() as u32,
-        height: size.height() as u32,
-        channels: 4,
-        texels: Texels::F32(px),
-        format: vk::Format::R32G32B32A32_SFLOAT,
-    })
+    let image =
+        read_first_flat_layer_from_file(path).with_context(|| format!("{}: cannot read EXR", path.display()))?;
+    let layer = image.layer_data;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let channels = layer.channel_data.list.len();
+    let mut px = vec![0f32; w * h * channels];
+    for (c, ch) in layer.channel_data.list.iter().enumerate() {
+        for (i, v) in ch.sample_data.values_as_f32().enumerate() {
+            px[i * channels + c] = v;
+        }
+    }
+    Ok(CpuImage { width: w as u32, height: h as u32, channels, texels: Texels::F32(px), format: vk::Format::UNDEFINED })
 }

@@ -301,3 +301,77 @@ fn masked_shadows_follow_the_alpha_texture() {
     }
     common::assert_validation_clean(ctx);
 }
+
+/// Hard shadows: a floor seen at a grazing angle is lit everywhere outside the box's shadow
+/// (no acne speckle), and the shadow touches the box (no peter-panning): every floor pixel
+/// whose footprint lies wholly inside or outside the analytic shadow gets that visibility.
+#[test]
+fn hard_shadows_have_no_acne_and_keep_contact() {
+    use hybrid_rt::scene::builtin::shadow_test_facts as facts;
+    let ctx = common::validated_context();
+    let backends: Vec<Backend> =
+        if ctx.caps.supports_ray_query() { vec![Backend::Compute, Backend::RayQuery] } else { vec![Backend::Compute] };
+    let (w, h) = (160u32, 120u32);
+    for backend in backends {
+        let settings = Settings { width: w, height: h, ..Default::default() };
+        let mut r = Renderer::new(
+            &ctx,
+            &ShaderLibrary::embedded(),
+            builtin::shadow_test(),
+            settings,
+            &CameraChoice::Default,
+            backend,
+        )
+        .unwrap();
+        r.render_frame().unwrap();
+        let img = r.read_outputs(&["gbuffer.ids", shadows::VISIBILITY]).unwrap();
+        let view = r.last_view.unwrap();
+        let size = glam::Vec2::new(w as f32, h as f32);
+        let floor_at = |px: glam::Vec2| {
+            let d = view.ray_dir(px, size);
+            (d.y < 0.0).then(|| view.position + d * (-view.position.y / d.y))
+        };
+        let (mut lit, mut shadowed, mut contact) = (0, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                if img[0].get_u32(x, y, 0) != facts::FLOOR_INSTANCE {
+                    continue;
+                }
+                // A 5x5 grid over the pixel must agree, else it straddles the shadow's edge.
+                let corners: Vec<Option<bool>> = (0..25)
+                    .map(|i| {
+                        let (dx, dy) = ((i % 5) as f32 / 4.0, (i / 5) as f32 / 4.0);
+                        floor_at(glam::Vec2::new(x as f32 + dx, y as f32 + dy)).map(facts::shadowed)
+                    })
+                    .collect();
+                if corners.iter().any(|c| *c != corners[0]) || corners[0].is_none() {
+                    continue;
+                }
+                let centre = floor_at(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).unwrap();
+                let expect_shadow = corners[0] == Some(true);
+                let got = img[1].get(x, y, 0);
+                assert_eq!(
+                    got,
+                    if expect_shadow { 0.0 } else { 1.0 },
+                    "{backend:?}: floor ({:.3}, {:.3})",
+                    centre.x,
+                    centre.z
+                );
+                if expect_shadow {
+                    shadowed += 1;
+                    // Within 6 cm (about 1.5 pixels here) of the box's base, on the floor outside it.
+                    let gap = (centre.x.abs() - facts::HALF).max(centre.z.abs() - facts::HALF);
+                    if gap < 0.06 {
+                        contact += 1;
+                    }
+                } else {
+                    lit += 1;
+                }
+            }
+        }
+        assert!(lit > 2000 && shadowed > 80, "{backend:?}: coverage lit {lit}, shadowed {shadowed}");
+        assert!(contact > 3, "{backend:?}: only {contact} shadowed floor pixels touch the box");
+        eprintln!("{backend:?}: {lit} lit and {shadowed} shadowed floor pixels as expected, {contact} at the contact");
+    }
+    common::assert_validation_clean(ctx);
+}

@@ -6,7 +6,7 @@ mod info;
 mod render;
 
 use crate::backend::BackendChoice;
-use crate::scene::{self, LoadOptions, Scene};
+use crate::scene::{self, Limits, LoadOptions, Scene};
 use anyhow::{Result, bail};
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -49,11 +49,62 @@ pub struct SceneArgs {
     /// Allow the scene's URIs to reach files outside the scene's folder.
     #[arg(long)]
     pub allow_outside_uris: bool,
+    #[command(flatten)]
+    pub limits: LimitArgs,
+}
+
+const LIMITS: &str = "Scene limits";
+
+/// What a scene file may make the renderer allocate (scene files are untrusted). The flag
+/// names are the ones `scene::limits::FLAGS` puts in the error when a limit is exceeded.
+#[derive(Args, Clone, Debug)]
+pub struct LimitArgs {
+    /// Most triangles over all meshes.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_triangles)]
+    pub max_triangles: u64,
+    /// Most vertices over all meshes; also the most elements of any one accessor.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_vertices)]
+    pub max_vertices: u64,
+    /// Largest width or height of any one image, in pixels.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_texture_dimension)]
+    pub max_texture_size: u32,
+    /// Most pixels over all images.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_texture_pixels_total)]
+    pub max_texture_pixels: u64,
+    /// Largest buffer, image file or scene file, in MiB.
+    #[arg(long, help_heading = LIMITS, value_name = "MIB", default_value_t = Limits::default().max_buffer_bytes >> 20)]
+    pub max_buffer_mib: u64,
+    /// Deepest node hierarchy (roots are at depth 1).
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_node_depth)]
+    pub max_node_depth: u32,
+    /// Most nodes, including those made for EXT_mesh_gpu_instancing copies.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_nodes)]
+    pub max_nodes: u32,
+    /// Longest `data:` URI, in MiB of encoded text.
+    #[arg(long, help_heading = LIMITS, value_name = "MIB", default_value_t = Limits::default().max_data_uri_bytes >> 20)]
+    pub max_data_uri_mib: u64,
+}
+
+impl LimitArgs {
+    pub fn limits(&self) -> Limits {
+        // A MiB count too large for a byte count in u64 is no limit at all.
+        let mib = |n: u64| n.saturating_mul(1 << 20);
+        Limits {
+            max_triangles: self.max_triangles,
+            max_vertices: self.max_vertices,
+            max_texture_dimension: self.max_texture_size,
+            max_texture_pixels_total: self.max_texture_pixels,
+            max_buffer_bytes: mib(self.max_buffer_mib),
+            max_node_depth: self.max_node_depth,
+            max_nodes: self.max_nodes,
+            max_data_uri_bytes: mib(self.max_data_uri_mib),
+        }
+    }
 }
 
 impl SceneArgs {
     pub fn load(&self) -> Result<Scene> {
-        let opts = LoadOptions { allow_outside_uris: self.allow_outside_uris, ..Default::default() };
+        let opts = LoadOptions { allow_outside_uris: self.allow_outside_uris, limits: self.limits.limits() };
         match &self.scene {
             Some(s) => load_scene(s, &opts),
             None => load_scene(&default_scene_path().to_string_lossy(), &opts),

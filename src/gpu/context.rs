@@ -229,7 +229,8 @@ fn open_device(instance: &ash::Instance, opts: &ContextOptions, instance_api: u3
         device: device.clone(),
         physical_device,
         debug_settings: Default::default(),
-        buffer_device_address: caps.buffer_device_address,
+        // Device addresses are enabled only for the ray-query backend (create_device).
+        buffer_device_address: caps.supports_ray_query(),
         allocation_sizes: Default::default(),
     });
     match allocator {

@@ -7,12 +7,13 @@ use anyhow::{Result, bail};
 use glam::{Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:`.
-pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow"];
+pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test"];
 
 pub fn by_name(name: &str) -> Result<Scene> {
     match name {
         "gbuffer-test" => Ok(gbuffer_test()),
         "alpha-shadow" => Ok(alpha_shadow()),
+        "shadow-test" => Ok(shadow_test()),
         _ => bail!("builtin:{name}: no such built-in scene (known: {})", NAMES.join(", ")),
     }
 }
@@ -184,6 +185,77 @@ pub fn alpha_shadow() -> Scene {
         range: None,
         radius: 0.0,
         node: 2,
+    });
+    s
+}
+
+/// Facts about `shadow_test` that tests check against.
+pub mod shadow_test_facts {
+    use glam::Vec3;
+    /// The box stands on the floor (y = 0): centre (0, HALF, 0), half extent HALF.
+    pub const HALF: f32 = 0.5;
+    /// Direction the sunlight travels.
+    pub fn light_dir() -> Vec3 {
+        Vec3::new(1.0, -0.6, 1.0).normalize()
+    }
+    pub const FLOOR_INSTANCE: u32 = 0;
+    /// Whether floor point `p` (y = 0) is in the box's shadow: the ray toward the light hits
+    /// the box.
+    pub fn shadowed(p: Vec3) -> bool {
+        let (o, d) = (p, -light_dir());
+        let (lo, hi) = (Vec3::new(-HALF, 0.0, -HALF), Vec3::new(HALF, 2.0 * HALF, HALF));
+        let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+        for a in 0..3 {
+            let (n, f) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+            t0 = t0.max(n.min(f));
+            t1 = t1.min(n.max(f));
+        }
+        t0 <= t1
+    }
+}
+
+/// A box on a large floor under a low sun, seen from a camera just above the floor: the
+/// floor is at a grazing angle (shadow acne would show as speckle) and the shadow must touch
+/// the box (peter-panning would detach it).
+pub fn shadow_test() -> Scene {
+    use shadow_test_facts::*;
+    let mut s = Scene { name: "builtin:shadow-test".into(), ..Default::default() };
+    s.materials.push(Material {
+        name: "white".into(),
+        metallic_factor: 0.0,
+        roughness_factor: 1.0,
+        ..Default::default()
+    });
+    s.meshes.push(quad(Vec3::ZERO, Vec3::Z * 40.0, Vec3::X * 40.0, 0));
+    s.meshes.push(cuboid(Vec3::splat(HALF), 0));
+    s.nodes.push(node("floor", Vec3::ZERO));
+    s.nodes.push(node("box", Vec3::new(0.0, HALF, 0.0)));
+    // Low enough that the far floor is seen at a few degrees, high enough to see the contact.
+    let eye = Vec3::new(2.5, 1.0, 6.5);
+    let mut cam = node("camera", eye);
+    cam.rotation = Quat::from_mat4(&glam::Mat4::look_at_rh(eye, Vec3::new(0.6, 0.0, 0.4), Vec3::Y).inverse());
+    s.nodes.push(cam);
+    let mut sun = node("sun", Vec3::ZERO);
+    sun.rotation = Quat::from_rotation_arc(Vec3::NEG_Z, light_dir());
+    s.nodes.push(sun);
+    s.instances.push(Instance { mesh: 0, node: 0 });
+    s.instances.push(Instance { mesh: 1, node: 1 });
+    s.cameras.push(Camera {
+        name: "grazing".into(),
+        yfov: 0.7,
+        aspect_ratio: None,
+        znear: 0.05,
+        zfar: Some(100.0),
+        node: 2,
+    });
+    s.lights.push(super::Light {
+        name: "sun".into(),
+        kind: super::LightKind::Directional,
+        color: Vec3::ONE,
+        intensity: 3.0,
+        range: None,
+        radius: 0.0,
+        node: 3,
     });
     s
 }

@@ -51,9 +51,17 @@ const UNTYPED_EXTENSIONS: &[&str] = &["KHR_texture_transform", "EXT_mesh_gpu_ins
 /// Loads a glTF 2.0 scene: the default scene (or scene 0, or every root node when the file
 /// has no scenes), with its meshes, materials, textures, lights, cameras and animations.
 pub fn load_gltf(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
+    let file = read_file(&Ctx::new(path, opts), path, "the scene file")?;
+    load_gltf_bytes(&file, path, opts)
+}
+
+/// Loads a glTF or GLB file already in memory, as [`load_gltf`] would load it from `path`:
+/// `path` names the file in messages and its folder is where relative URIs resolve. The
+/// fuzzers feed mutated files through here without writing them to disk.
+pub fn load_gltf_bytes(file: &[u8], path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
     let ctx = Ctx::new(path, opts);
-    let file = read_file(&ctx, path, "the scene file")?;
-    let (json_bytes, bin) = split_container(&ctx, &file)?;
+    ctx.check("size of the scene file", "max_buffer_bytes", file.len() as u64, ctx.limits().max_buffer_bytes)?;
+    let (json_bytes, bin) = split_container(&ctx, file)?;
     let root = parse_json(&ctx, json_bytes)?;
     check_asset(&ctx, &root)?;
     let untyped = untyped_json(&ctx, &root, json_bytes)?;

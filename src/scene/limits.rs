@@ -46,11 +46,29 @@ impl Default for Limits {
     }
 }
 
-/// Fails with an error naming the file, what was measured, the limit and both values when
-/// `value` exceeds `limit`.
+/// The command-line flag that sets each limit (`hybrid-rt render --help` lists them): an
+/// exceeded limit names its flag, so the user learns what to raise without reading the source.
+pub const FLAGS: [(&str, &str); 8] = [
+    ("max_triangles", "--max-triangles"),
+    ("max_vertices", "--max-vertices"),
+    ("max_texture_dimension", "--max-texture-size"),
+    ("max_texture_pixels_total", "--max-texture-pixels"),
+    ("max_buffer_bytes", "--max-buffer-mib"),
+    ("max_node_depth", "--max-node-depth"),
+    ("max_nodes", "--max-nodes"),
+    ("max_data_uri_bytes", "--max-data-uri-mib"),
+];
+
+/// Fails with an error naming the file, what was measured, the limit, both values and the
+/// flag that raises the limit when `value` exceeds `limit`. `limit_name` is a field of
+/// [`Limits`], or an expression in one (`3 * max_triangles + 2`).
 pub fn check_limit(file: &Path, what: &str, limit_name: &str, value: u64, limit: u64) -> Result<(), SceneError> {
     if value > limit {
-        return Err(SceneError::new(file, format!("{what}: {value} exceeds the limit {limit_name} = {limit}")));
+        let mut problem = format!("{what}: {value} exceeds the limit {limit_name} = {limit}");
+        if let Some((_, flag)) = FLAGS.iter().find(|(field, _)| limit_name.contains(field)) {
+            problem.push_str(&format!(" (raise it with {flag})"));
+        }
+        return Err(SceneError::new(file, problem));
     }
     Ok(())
 }
@@ -80,5 +98,8 @@ mod tests {
         assert!(msg.contains("max_triangles"), "{msg}");
         assert!(msg.contains("11"), "{msg}");
         assert!(msg.contains("= 10"), "{msg}");
+        assert!(msg.contains("(raise it with --max-triangles)"), "{msg}");
+        let indices = check_limit(file, "indices", "3 * max_triangles + 2", 6, 5).unwrap_err().to_string();
+        assert!(indices.contains("--max-triangles"), "{indices}");
     }
 }
