@@ -67,6 +67,8 @@ pub struct Renderer {
     prev_view: Option<View>,
     pub last_view: Option<View>,
     pub last_pass_times: Vec<PassTime>,
+    /// The ray-list tracer, made on first use.
+    ray_batch: Option<ray_batch::RayBatch>,
 }
 
 impl Renderer {
@@ -113,6 +115,7 @@ impl Renderer {
             prev_view: None,
             last_view: None,
             last_pass_times: Vec::new(),
+            ray_batch: None,
         })
     }
 
@@ -212,7 +215,10 @@ impl Renderer {
         any_hit: bool,
         repeats: u32,
     ) -> Result<(Vec<ray_batch::HitRecord>, Vec<f64>)> {
-        let batch = ray_batch::RayBatch::new(&self.ctx, shaders, &self.scene_gpu)?;
+        if self.ray_batch.is_none() {
+            self.ray_batch = Some(ray_batch::RayBatch::new(&self.ctx, shaders, &self.scene_gpu)?);
+        }
+        let batch = self.ray_batch.as_ref().expect("created above");
         batch.trace(&self.ctx, &self.pool, &mut self.scene_gpu, rays, any_hit, repeats)
     }
 

@@ -50,8 +50,9 @@ impl RayBatch {
         Ok(Self { pipeline, _set_layout: set_layout, timestamps: TimestampPool::new(ctx, 2)? })
     }
 
-    /// Traces `rays` (closest hit, or any hit for shadow rays) `repeats` times; returns the
-    /// hits and the GPU time of each repetition in milliseconds (empty without timestamps).
+    /// Traces `rays` (closest hit, or any hit for shadow rays) `repeats` times after one
+    /// untimed warm-up (lavapipe compiles a pipeline's code at its first dispatch); returns
+    /// the hits and the GPU time of each repetition in milliseconds (empty without timestamps).
     pub fn trace(
         &self,
         ctx: &Arc<Context>,
@@ -72,7 +73,7 @@ impl RayBatch {
         )?;
         let push: [u32; 2] = [rays.len() as u32, any_hit as u32];
         let mut times = Vec::new();
-        for _ in 0..repeats.max(1) {
+        for run in 0..=repeats.max(1) {
             pool.run(|cmd| {
                 let rec = Recorder::new(ctx, cmd);
                 scene.accel.record_update(&rec)?;
@@ -93,7 +94,7 @@ impl RayBatch {
                 );
                 Ok(())
             })?;
-            if let Some(ts) = self.timestamps.read_ms(2) {
+            if let (true, Some(ts)) = (run > 0, self.timestamps.read_ms(2)) {
                 times.push(ts[1] - ts[0]);
             }
         }
