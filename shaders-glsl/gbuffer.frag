@@ -14,7 +14,7 @@ layout(location = 5) in vec4 in_clip;
 layout(location = 6) in vec4 in_prev_clip;
 layout(location = 7) flat in uint in_instance;
 
-layout(location = 0) out float out_depth;       // gbuffer.depth: view-space depth (distance along the view axis)
+layout(location = 0) out vec2 out_depth;        // gbuffer.depth: view depth (along the view axis), its fwidth
 layout(location = 1) out vec4 out_normal_geo;   // gbuffer.normal_geo: world geometric normal, facing the viewer
 layout(location = 2) out vec4 out_normal;       // gbuffer.normal: world shading normal (normal-mapped)
 layout(location = 3) out vec4 out_base_color;   // gbuffer.base_color: linear RGB, alpha
@@ -50,7 +50,10 @@ void main() {
     vec2 ndc = in_clip.xy / in_clip.w;
     vec2 prev_ndc = in_prev_clip.xy / in_prev_clip.w;
 
-    out_depth = dot(in_world - frame.camera_pos, -frame.inv_view[2].xyz);
+    float depth = dot(in_world - frame.camera_pos, -frame.inv_view[2].xyz);
+    // The rasteriser's derivative is the slope of this triangle's plane, even in a one-pixel
+    // sliver between two other surfaces, where neighbouring pixels would give the jump.
+    out_depth = vec2(depth, fwidth(depth));
     out_normal_geo = vec4(ng, 0.0);
     out_normal = vec4(n, 0.0);
     out_base_color = s.base_color;

@@ -8,7 +8,7 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 1, binding = 0, r32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 2, rg32ui) uniform readonly uimage2D g_ids;
 // Channel i: visibility (0 or 1) of light i; 1 for lights that do not exist.

@@ -152,8 +152,8 @@ pub fn channel_names(channels: usize) -> &'static [&'static str] {
     }
 }
 
-/// Reads every channel of the first layer of an EXR (as written by [`write_exr`]) as f32,
-/// channels in the file's (alphabetical) order.
+/// Reads every channel of the first layer of an EXR (as written by [`write_exr`]) as f32.
+/// EXR stores channels sorted by name; they come back in R, G, B, A (or Y) order, others after.
 pub fn read_exr_channels(path: &Path) -> Result<CpuImage> {
     use exr::prelude::*;
     let image =
@@ -161,11 +161,36 @@ pub fn read_exr_channels(path: &Path) -> Result<CpuImage> {
     let layer = image.layer_data;
     let (w, h) = (layer.size.width(), layer.size.height());
     let channels = layer.channel_data.list.len();
+    let rank = |name: &str| ["Y", "R", "G", "B", "A"].iter().position(|n| *n == name).unwrap_or(5);
+    let mut list: Vec<_> = layer.channel_data.list.iter().collect();
+    list.sort_by_key(|ch| rank(&ch.name.to_string()));
     let mut px = vec![0f32; w * h * channels];
-    for (c, ch) in layer.channel_data.list.iter().enumerate() {
+    for (c, ch) in list.iter().enumerate() {
         for (i, v) in ch.sample_data.values_as_f32().enumerate() {
             px[i * channels + c] = v;
         }
     }
     Ok(CpuImage { width: w as u32, height: h as u32, channels, texels: Texels::F32(px), format: vk::Format::UNDEFINED })
+}
+/// Reads an RGB(A) float EXR (the first layer) as a 4-channel image.
+pub fn read_exr_rgba(path: &Path) -> Result<CpuImage> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![0f32; res.width() * res.height() * 4]),
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            let i = (pos.y() * *w + pos.x()) * 4;
+            px[i..i + 4].copy_from_slice(&[r, g, b, a]);
+        },
+    )
+    .with_context(|| format!("{}: cannot read EXR", path.display()))?;
+    let size = image.layer_data.size;
+    let (_, px) = image.layer_data.channel_data.pixels;
+    Ok(CpuImage {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        channels: 4,
+        texels: Texels::F32(px),
+        format: vk::Format::R32G32B32A32_SFLOAT,
+    })
 }

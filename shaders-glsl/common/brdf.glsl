@@ -4,8 +4,8 @@
 #ifndef BRDF_GLSL
 #define BRDF_GLSL
 
-#define PI 3.14159265358979
-#define INV_PI 0.31830988618379
+#include "sampling.glsl"
+#include "color.glsl"
 
 // Roughness below this is treated as this (a perfect mirror has no finite GGX density).
 #define MIN_ALPHA 1e-3
@@ -51,6 +51,78 @@ vec3 brdf_eval_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
     vec3 spec = f * ggx_d(max(dot(n, h), 0.0), alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
     vec3 diff = (1.0 - f) * brdf_diffuse_albedo(m) * INV_PI;
     return (diff + spec) * n_dot_l;
+}
+
+// ---- Sampling ---------------------------------------------------------------------------------
+// brdf_sample draws l from a mixture of the two lobes: the GGX visible-normal distribution
+// reflected about the sampled microfacet (specular) and the cosine hemisphere (diffuse), with
+// the specular lobe chosen with probability brdf_spec_probability. brdf_pdf is the mixture's
+// solid-angle density, which is what multiple importance sampling compares against light pdfs.
+
+// Smith masking G1 of GGX for a direction at cosine n_dot_w to the normal.
+float ggx_g1(float n_dot_w, float alpha) {
+    float a2 = alpha * alpha;
+    return 2.0 * n_dot_w / (n_dot_w + sqrt(a2 + (1.0 - a2) * n_dot_w * n_dot_w));
+}
+
+// Density of l = reflect(-v, m) when m is drawn from the visible normals of v:
+// D_v(m) / (4 v.m) = G1(v) D(m) / (4 n.v).
+float ggx_vndf_pdf(float n_dot_v, float n_dot_h, float alpha) {
+    return ggx_g1(n_dot_v, alpha) * ggx_d(n_dot_h, alpha) / (4.0 * n_dot_v);
+}
+
+// Probability of drawing from the specular lobe: the lobes' weights at normal-ish incidence,
+// Fresnel for the specular one and (1 - Fresnel) * diffuse albedo for the diffuse one. Only a
+// variance choice; any value in (0, 1] for a lobe that can contribute keeps the estimate
+// unbiased. A lobe that cannot contribute (diffuse of a metal) gets probability 0.
+float brdf_spec_probability(BrdfInput m, float n_dot_v) {
+    vec3 f = fresnel_schlick(brdf_f0(m), n_dot_v);
+    float s = luminance(f);
+    float d = luminance((1.0 - f) * brdf_diffuse_albedo(m));
+    return s + d > 0.0 ? s / (s + d) : 0.5;
+}
+
+// Solid-angle density of brdf_sample producing l (0 below either horizon).
+float brdf_pdf(BrdfInput m, vec3 n, vec3 v, vec3 l) {
+    float n_dot_l = dot(n, l);
+    float n_dot_v = dot(n, v);
+    if (n_dot_l <= 0.0 || n_dot_v <= 0.0) return 0.0;
+    float p_spec = brdf_spec_probability(m, n_dot_v);
+    vec3 h = normalize(v + l);
+    float spec = ggx_vndf_pdf(n_dot_v, max(dot(n, h), 0.0), ggx_alpha(m.roughness));
+    return p_spec * spec + (1.0 - p_spec) * n_dot_l * INV_PI;
+}
+
+struct BrdfSample {
+    vec3 l;       // sampled direction (unit, away from the surface)
+    float pdf;    // brdf_pdf(l); 0 when no direction was produced (below the horizon)
+    vec3 weight;  // brdf_eval_cos(l) / pdf, the path throughput factor
+};
+
+// Draws a direction for view v at normal n from three uniform numbers (u.z picks the lobe).
+BrdfSample brdf_sample(BrdfInput m, vec3 n, vec3 v, vec3 u) {
+    BrdfSample s;
+    s.l = n;
+    s.pdf = 0.0;
+    s.weight = vec3(0.0);
+    float n_dot_v = dot(n, v);
+    if (n_dot_v <= 0.0) return s;
+    mat3 frame = orthonormal_basis(n);
+    vec3 l_local;
+    if (u.z < brdf_spec_probability(m, n_dot_v)) {
+        vec3 v_local = vec3(dot(v, frame[0]), dot(v, frame[1]), n_dot_v);
+        vec3 h = sample_ggx_vndf(v_local, ggx_alpha(m.roughness), u.xy);
+        l_local = reflect(-v_local, h);
+    } else {
+        l_local = sample_cosine_hemisphere(u.xy);
+    }
+    // Visible normals can reflect the view below the horizon: that sample is lost (its share
+    // of the density is the part of brdf_pdf's specular term that integrates below it).
+    if (l_local.z <= 0.0) return s;
+    s.l = normalize(frame * l_local);
+    s.pdf = brdf_pdf(m, n, v, s.l);
+    if (s.pdf > 0.0) s.weight = brdf_eval_cos(m, n, v, s.l) / s.pdf;
+    return s;
 }
 
 #endif

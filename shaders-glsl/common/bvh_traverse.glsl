@@ -1,6 +1,13 @@
 // The compute backend's traversal of the project's two-level BVH (src/accel/bvh): the GLSL
 // twin of src/accel/bvh/traverse.rs, which documents the algorithm and is the reference the
 // tests compare against. Included by trace.glsl under RT_COMPUTE_BVH.
+//
+// Written for SIMD execution (lavapipe runs 8 invocations per AVX2 vector, with masks for
+// divergent control flow): one loop for both levels with one stack, and one step of every
+// kind per iteration (a triangle, a pop, a node, an instance entry), so lanes at different
+// levels or in leaves of different sizes advance together instead of waiting for each other's
+// nested loops. The stack lives in module-scope arrays indexed only dynamically: arrays
+// passed as inout parameters are copied whole on every call (and scalarised by spirv-opt).
 #ifndef BVH_TRAVERSE_GLSL
 #define BVH_TRAVERSE_GLSL
 
@@ -10,12 +17,6 @@ struct BvhNode {
     vec4 a_max;  // w: child B reference
     vec4 b_min;
     vec4 b_max;
-};
-
-struct BvhTriangle {
-    vec4 v0;  // w: triangle index in the mesh's index buffer
-    vec4 v1;
-    vec4 v2;
 };
 
 struct BvhInstance {
@@ -31,24 +32,25 @@ struct BvhInstance {
     uint pad;
 };
 
-layout(set = 0, binding = 8, std430) readonly buffer TlasNodes { BvhNode tlas_nodes[]; };
+// Binding 8: the top level's nodes (from index 0) followed by every mesh's nodes (instances'
+// root_node indexes this buffer), so both levels fetch nodes the same way.
+layout(set = 0, binding = 8, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(set = 0, binding = 9, std430) readonly buffer TlasInstances { BvhInstance tlas_instances[]; };
-layout(set = 0, binding = 10, std430) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
-layout(set = 0, binding = 11, std430) readonly buffer BlasTriangles { BvhTriangle blas_triangles[]; };
+layout(set = 0, binding = 10, std430) readonly buffer BlasTriangles { vec4 blas_triangles[]; };  // 3 per triangle
 
 #define BVH_LEAF_BIT 0x80000000u
 #define BVH_COUNT_SHIFT 27u
 #define BVH_FIRST_MASK 0x07ffffffu
 #define BVH_COUNT_MASK 0xfu
+#define BVH_NONE 0xffffffffu
 #define BVH_INSTANCE_ALPHA_TESTED 1u
-// Both levels' trees are at most this deep (src/accel/bvh/layout.rs STACK_SIZE).
-#define BVH_STACK_SIZE 64
+// Each level's tree is at most STACK_SIZE deep (src/accel/bvh/layout.rs); one stack holds both.
+#define BVH_STACK_SIZE 128
 #define BVH_BOX_FAR_SCALE 1.0000004
 #define BVH_MIN_DIR 1e-20
 
 struct BvhRay {
     vec3 origin;
-    vec3 dir;
     vec3 inv_dir;
     ivec3 k;     // x, y, z axis permutation; dir[k.z] is the largest component
     vec3 shear;  // sx, sy, sz
@@ -57,7 +59,6 @@ struct BvhRay {
 BvhRay bvh_ray(vec3 origin, vec3 dir) {
     BvhRay r;
     r.origin = origin;
-    r.dir = dir;
     // Tiny components become +-BVH_MIN_DIR with the component's sign bit (copysign).
     vec3 tiny = uintBitsToFloat((floatBitsToUint(dir) & 0x80000000u) | floatBitsToUint(BVH_MIN_DIR));
     vec3 safe = mix(dir, tiny, lessThan(abs(dir), vec3(BVH_MIN_DIR)));
@@ -97,10 +98,10 @@ float bvh_edge_exact(float px, float py, float qx, float qy) {
 }
 
 // Watertight ray/triangle test (Woop, Benthin, Wald 2013). Returns t, or -1 on a miss.
-float bvh_hit_triangle(BvhRay r, BvhTriangle tri, float tmin, float tmax, out vec2 bary, out bool front) {
-    vec3 a = tri.v0.xyz - r.origin;
-    vec3 b = tri.v1.xyz - r.origin;
-    vec3 c = tri.v2.xyz - r.origin;
+float bvh_hit_triangle(BvhRay r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, out vec2 bary, out bool front) {
+    vec3 a = v0 - r.origin;
+    vec3 b = v1 - r.origin;
+    vec3 c = v2 - r.origin;
     float ax = a[r.k.x] - r.shear.x * a[r.k.z], ay = a[r.k.y] - r.shear.y * a[r.k.z];
     float bx = b[r.k.x] - r.shear.x * b[r.k.z], by = b[r.k.y] - r.shear.y * b[r.k.z];
     float cx = c[r.k.x] - r.shear.x * c[r.k.z], cy = c[r.k.y] - r.shear.y * c[r.k.z];
@@ -126,99 +127,101 @@ float bvh_hit_triangle(BvhRay r, BvhTriangle tri, float tmin, float tmax, out ve
 vec3 bvh_xform_point(vec4 m[3], vec3 p) { return vec3(dot(m[0], vec4(p, 1.0)), dot(m[1], vec4(p, 1.0)), dot(m[2], vec4(p, 1.0))); }
 vec3 bvh_xform_vector(vec4 m[3], vec3 d) { return vec3(dot(m[0].xyz, d), dot(m[1].xyz, d), dot(m[2].xyz, d)); }
 
-// Tests both children; returns the reference to enter (pushing the farther when both are hit)
-// or BVH_NONE.
-#define BVH_NONE 0xffffffffu
-
-uint bvh_visit(BvhNode node, BvhRay r, float tmin, float tmax,
-               inout uint stack_ref[BVH_STACK_SIZE], inout float stack_t[BVH_STACK_SIZE], inout int sp) {
-    float ta = bvh_hit_box(r, node.a_min.xyz, node.a_max.xyz, tmin, tmax);
-    float tb = bvh_hit_box(r, node.b_min.xyz, node.b_max.xyz, tmin, tmax);
-    uint a = floatBitsToUint(node.a_min.w);
-    uint b = floatBitsToUint(node.a_max.w);
-    if (ta >= 0.0 && tb >= 0.0) {
-        if (tb < ta) {
-            stack_ref[sp] = a; stack_t[sp] = ta; ++sp;
-            return b;
-        }
-        stack_ref[sp] = b; stack_t[sp] = tb; ++sp;
-        return a;
-    }
-    if (ta >= 0.0) return a;
-    if (tb >= 0.0) return b;
-    return BVH_NONE;
-}
-
-uint bvh_pop(inout uint stack_ref[BVH_STACK_SIZE], inout float stack_t[BVH_STACK_SIZE], inout int sp, float tmax) {
-    while (sp > 0) {
-        --sp;
-        if (stack_t[sp] <= tmax) return stack_ref[sp];
-    }
-    return BVH_NONE;
-}
-
-// Walks one instance's mesh; updates `closest` and `best`. Returns true if it accepted a hit.
-bool bvh_trace_mesh(BvhInstance inst, BvhRay r, float tmin, bool first_hit, inout float closest, inout Hit best) {
-    uint stack_ref[BVH_STACK_SIZE];
-    float stack_t[BVH_STACK_SIZE];
-    int sp = 0;
-    bool found = false;
-    uint cur = 0u;
-    while (cur != BVH_NONE) {
-        if ((cur & BVH_LEAF_BIT) == 0u) {
-            cur = bvh_visit(blas_nodes[inst.root_node + cur], r, tmin, closest, stack_ref, stack_t, sp);
-            if (cur != BVH_NONE) continue;
-        } else {
-            uint first = cur & BVH_FIRST_MASK;
-            uint count = ((cur >> BVH_COUNT_SHIFT) & BVH_COUNT_MASK) + 1u;
-            for (uint i = first; i < first + count; ++i) {
-                BvhTriangle tri = blas_triangles[inst.first_triangle + i];
-                vec2 bary;
-                bool front;
-                float t = bvh_hit_triangle(r, tri, tmin, closest, bary, front);
-                if (t < 0.0) continue;
-                uint prim = floatBitsToUint(tri.v0.w);
-                if ((inst.flags & BVH_INSTANCE_ALPHA_TESTED) != 0u && !hit_alpha_accept(inst.custom_index, prim, bary)) continue;
-                closest = t;
-                best.instance = inst.custom_index;
-                best.primitive = prim;
-                best.t = t;
-                best.bary = bary;
-                best.front_face = front;
-                found = true;
-                if (first_hit) return true;
-            }
-        }
-        cur = bvh_pop(stack_ref, stack_t, sp, closest);
-    }
-    return found;
-}
+// The traversal stack: child references and their entry distances.
+uint bvh_stack_ref[BVH_STACK_SIZE];
+float bvh_stack_t[BVH_STACK_SIZE];
 
 Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
-    BvhRay r = bvh_ray(origin, dir);
+    BvhRay world = bvh_ray(origin, dir);
+    BvhRay r = world;
     Hit best;
     best.instance = NO_HIT;
     float closest = tmax;
-    uint stack_ref[BVH_STACK_SIZE];
-    float stack_t[BVH_STACK_SIZE];
     int sp = 0;
-    uint cur = tlas_instances.length() > 0 ? 0u : BVH_NONE;
-    while (cur != BVH_NONE) {
+    // While inside an instance: the stack depth at its entry (entries below belong to the top
+    // level), its mesh's nodes and triangles, and what a hit reports. -1 in the top level.
+    int inst_sp = -1;
+    uint node_base = 0u;
+    uint tri_base = 0u;
+    uint inst_custom = 0u;
+    bool inst_alpha = false;
+    // The leaf being tested: triangles tri_next..tri_end (relative to tri_base).
+    uint tri_next = 0u;
+    uint tri_end = 0u;
+    uint cur = 0u;
+    while (true) {
+        if (tri_next < tri_end) {
+            uint at = 3u * (tri_base + tri_next);
+            vec2 bary;
+            bool front;
+            float t = bvh_hit_triangle(r, blas_triangles[at].xyz, blas_triangles[at + 1u].xyz,
+                                       blas_triangles[at + 2u].xyz, tmin, closest, bary, front);
+            if (t >= 0.0) {
+                uint prim = floatBitsToUint(blas_triangles[at].w);
+                if (!inst_alpha || hit_alpha_accept(inst_custom, prim, bary)) {
+                    closest = t;
+                    best.instance = inst_custom;
+                    best.primitive = prim;
+                    best.t = t;
+                    best.bary = bary;
+                    best.front_face = front;
+                    if (first_hit) break;
+                }
+            }
+            ++tri_next;
+        }
+        if (tri_next < tri_end) continue;
+        if (cur == BVH_NONE) {
+            // Pop, dropping entries the closest hit has passed; leave the instance once only
+            // top-level entries remain.
+            while (sp > 0 && bvh_stack_t[sp - 1] > closest) --sp;
+            if (sp <= inst_sp) {
+                r = world;
+                node_base = 0u;
+                inst_sp = -1;
+            }
+            if (sp == 0) break;
+            --sp;
+            cur = bvh_stack_ref[sp];
+        }
         if ((cur & BVH_LEAF_BIT) == 0u) {
-            cur = bvh_visit(tlas_nodes[cur], r, tmin, closest, stack_ref, stack_t, sp);
-            if (cur != BVH_NONE) continue;
-        } else {
-            uint first = cur & BVH_FIRST_MASK;
-            uint count = ((cur >> BVH_COUNT_SHIFT) & BVH_COUNT_MASK) + 1u;
-            for (uint i = first; i < first + count; ++i) {
-                BvhInstance inst = tlas_instances[i];
-                if ((inst.mask & mask) == 0u) continue;
-                BvhRay local = bvh_ray(bvh_xform_point(inst.world_to_object, origin),
-                                       bvh_xform_vector(inst.world_to_object, dir));
-                if (bvh_trace_mesh(inst, local, tmin, first_hit, closest, best) && first_hit) return best;
+            // Inner node: enter the nearer child hit, push the farther.
+            BvhNode node = bvh_nodes[node_base + cur];
+            float ta = bvh_hit_box(r, node.a_min.xyz, node.a_max.xyz, tmin, closest);
+            float tb = bvh_hit_box(r, node.b_min.xyz, node.b_max.xyz, tmin, closest);
+            uint a = floatBitsToUint(node.a_min.w);
+            uint b = floatBitsToUint(node.a_max.w);
+            cur = ta >= 0.0 ? a : (tb >= 0.0 ? b : BVH_NONE);
+            if (ta >= 0.0 && tb >= 0.0) {
+                bool b_first = tb < ta;
+                bvh_stack_ref[sp] = b_first ? a : b;
+                bvh_stack_t[sp] = b_first ? ta : tb;
+                ++sp;
+                cur = b_first ? b : a;
             }
         }
-        cur = bvh_pop(stack_ref, stack_t, sp, closest);
+        if (cur != BVH_NONE && (cur & BVH_LEAF_BIT) != 0u) {
+            uint first = cur & BVH_FIRST_MASK;
+            uint count = ((cur >> BVH_COUNT_SHIFT) & BVH_COUNT_MASK) + 1u;
+            cur = BVH_NONE;
+            if (inst_sp >= 0) {
+                tri_next = first;
+                tri_end = first + count;
+            } else {
+                // A top-level leaf is one instance: continue in its mesh, in object space.
+                BvhInstance inst = tlas_instances[first];
+                if ((inst.mask & mask) != 0u) {
+                    r = bvh_ray(bvh_xform_point(inst.world_to_object, origin),
+                                bvh_xform_vector(inst.world_to_object, dir));
+                    inst_sp = sp;
+                    node_base = inst.root_node;
+                    tri_base = inst.first_triangle;
+                    inst_custom = inst.custom_index;
+                    inst_alpha = (inst.flags & BVH_INSTANCE_ALPHA_TESTED) != 0u;
+                    cur = 0u;
+                }
+            }
+        }
     }
     return best;
 }

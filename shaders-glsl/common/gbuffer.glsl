@@ -15,9 +15,10 @@ vec3 camera_ray_dir(vec2 pixel) {
 
 vec3 camera_forward() { return -frame.inv_view[2].xyz; }
 
-// World position of the surface at pixel `px` whose view depth is `depth`.
+// World position of the surface at pixel `px` whose view depth is `depth`. The G-buffer was
+// rasterised with the frame's sub-pixel jitter, so its sample sits at centre - jitter.
 vec3 world_position(ivec2 px, float depth) {
-    vec3 dir = camera_ray_dir(vec2(px) + 0.5);
+    vec3 dir = camera_ray_dir(vec2(px) + 0.5 - frame.jitter);
     // depth is measured along the view axis, the ray along dir: divide by their cosine.
     return frame.camera_pos + dir * (depth / dot(dir, camera_forward()));
 }

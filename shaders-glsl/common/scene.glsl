@@ -94,7 +94,11 @@ layout(set = 0, binding = 0, scalar) uniform FrameUniforms {
     float exposure;
     vec3 sky_color;
     uint instance_count;
+    uint flags;  // FRAME_*
 } frame;
+
+// Set on the first frame and after a camera cut: temporal passes start their history anew.
+#define FRAME_RESET_HISTORY 1u
 
 layout(set = 0, binding = 1, scalar) readonly buffer Vertices { Vertex vertices[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Indices { uint indices[]; };

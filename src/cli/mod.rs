@@ -3,6 +3,7 @@
 
 mod bench;
 mod info;
+mod reference;
 mod render;
 
 use crate::backend::BackendChoice;
@@ -27,6 +28,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Benchmarks (see `hybrid-rt bench --help`).
     Bench(bench::BenchArgs),
+    /// Render the ground truth with the progressive path tracer to a linear EXR.
+    Reference(reference::ReferenceArgs),
 }
 
 /// Arguments every GPU command takes.
@@ -74,6 +77,9 @@ pub struct LimitArgs {
     /// Largest buffer, image file or scene file, in MiB.
     #[arg(long, help_heading = LIMITS, value_name = "MIB", default_value_t = Limits::default().max_buffer_bytes >> 20)]
     pub max_buffer_mib: u64,
+    /// Most MiB of all buffers and images loaded from URIs together.
+    #[arg(long, help_heading = LIMITS, value_name = "MIB", default_value_t = Limits::default().max_total_bytes >> 20)]
+    pub max_total_mib: u64,
     /// Deepest node hierarchy (roots are at depth 1).
     #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_node_depth)]
     pub max_node_depth: u32,
@@ -83,6 +89,12 @@ pub struct LimitArgs {
     /// Longest `data:` URI, in MiB of encoded text.
     #[arg(long, help_heading = LIMITS, value_name = "MIB", default_value_t = Limits::default().max_data_uri_bytes >> 20)]
     pub max_data_uri_mib: u64,
+    /// Most mesh instances (one per primitive of each node drawing a mesh).
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_instances)]
+    pub max_instances: u64,
+    /// Most keyframe times and values over all animations.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_animation_keys)]
+    pub max_animation_keys: u64,
 }
 
 impl LimitArgs {
@@ -95,9 +107,12 @@ impl LimitArgs {
             max_texture_dimension: self.max_texture_size,
             max_texture_pixels_total: self.max_texture_pixels,
             max_buffer_bytes: mib(self.max_buffer_mib),
+            max_total_bytes: mib(self.max_total_mib),
             max_node_depth: self.max_node_depth,
             max_nodes: self.max_nodes,
             max_data_uri_bytes: mib(self.max_data_uri_mib),
+            max_instances: self.max_instances,
+            max_animation_keys: self.max_animation_keys,
         }
     }
 }
@@ -153,6 +168,7 @@ fn run(cli: Cli) -> ExitCode {
         Command::Render(a) => render::run(&a),
         Command::Info(a) => info::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::Reference(a) => reference::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -184,7 +200,7 @@ pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     }
     let bar = indicatif::ProgressBar::new(len);
     let style = indicatif::ProgressStyle::with_template(&format!(
-        "{{bar:40}} {{pos}}/{{len}} {what} [{{elapsed_precise}} elapsed, {{eta}} left]"
+        "{{bar:40}} {{pos}}/{{len}} {what} [{{elapsed_precise}} elapsed, {{eta}} left] {{msg}}"
     ))
     .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
     bar.set_style(style);

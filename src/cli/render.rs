@@ -35,6 +35,9 @@ pub struct RenderArgs {
     /// Frames to dump, 1-based, comma-separated (default: the last frame).
     #[arg(long, value_delimiter = ',')]
     dump_frames: Vec<u32>,
+    /// Turn temporal anti-aliasing off (it is on by default).
+    #[arg(long)]
+    no_taa: bool,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -68,7 +71,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     let scene_name = scene.name.clone();
-    let settings = Settings { width, height, exposure: a.exposure, ..Default::default() };
+    let settings = Settings { width, height, exposure: a.exposure, taa: !a.no_taa, ..Default::default() };
     let camera = a.camera.clone().unwrap_or_default();
     let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &camera, picked)?;
 
@@ -88,7 +91,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     bar.finish_and_clear();
 
     if ext.as_deref() == Some("exr") {
-        let img = renderer.read_output(render::HDR_OUTPUT)?;
+        let img = renderer.read_output(&renderer.hdr_output().to_string())?;
         image_io::write_exr(&a.out, &img, image_io::channel_names(img.channels))?;
     } else {
         let img = renderer.read_output(render::DISPLAY_OUTPUT)?;

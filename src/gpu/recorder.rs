@@ -166,13 +166,56 @@ impl<'a> Recorder<'a> {
         };
     }
 
+    /// Fills a whole image (GENERAL layout) from tightly packed texels in a buffer.
+    pub fn copy_buffer_to_image(&self, buffer: &Buffer, image: &Image) {
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: image.aspect,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 });
+        unsafe {
+            self.ctx.device.cmd_copy_buffer_to_image(
+                self.cmd,
+                buffer.raw,
+                image.raw,
+                vk::ImageLayout::GENERAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Copies a whole image into another of the same size and format (both in GENERAL).
+    pub fn copy_image(&self, src: &Image, dst: &Image) {
+        let layers =
+            vk::ImageSubresourceLayers { aspect_mask: src.aspect, mip_level: 0, base_array_layer: 0, layer_count: 1 };
+        let region = vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
+            width: src.extent.width,
+            height: src.extent.height,
+            depth: 1,
+        });
+        unsafe {
+            self.ctx.device.cmd_copy_image(
+                self.cmd,
+                src.raw,
+                vk::ImageLayout::GENERAL,
+                dst.raw,
+                vk::ImageLayout::GENERAL,
+                &[region],
+            )
+        };
+    }
+
     pub fn copy_buffer(&self, src: &Buffer, dst: &Buffer, size: u64) {
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size };
         unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]) };
     }
 
-    pub fn clear_image(&self, image: &Image, value: [f32; 4]) {
-        let color = vk::ClearColorValue { float32: value };
+    /// Clears a colour image to zero (all bits zero, whatever its format).
+    pub fn clear_image(&self, image: &Image) {
+        let color = vk::ClearColorValue { uint32: [0; 4] };
         unsafe {
             self.ctx.device.cmd_clear_color_image(
                 self.cmd,

@@ -38,6 +38,8 @@ pub enum Preview {
 pub enum Usage {
     /// Written by compute shaders with imageStore.
     Storage,
+    /// Written by a copy (the history pass).
+    Transfer,
     /// Written as a colour attachment by a raster pass.
     ColorAttachment,
     /// The depth attachment of a raster pass.
@@ -51,20 +53,38 @@ pub struct OutputDesc {
     pub format: vk::Format,
     pub usage: Usage,
     pub preview: Preview,
+    /// Size when it is not the frame's (small statistics images).
+    pub extent: Option<vk::Extent2D>,
 }
 
 impl OutputDesc {
     pub fn storage(pass: &str, output: &str, format: vk::Format, preview: Preview) -> Self {
-        Self { name: format!("{pass}.{output}"), format, usage: Usage::Storage, preview }
+        Self { name: format!("{pass}.{output}"), format, usage: Usage::Storage, preview, extent: None }
     }
+
+    pub fn with_extent(mut self, width: u32, height: u32) -> Self {
+        self.extent = Some(vk::Extent2D { width, height });
+        self
+    }
+}
+
+/// Where a pass does its work, which decides the stages its barriers name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassKind {
+    Compute,
+    /// Reads its inputs in fragment shaders and writes attachments.
+    Raster,
+    /// Copies images.
+    Transfer,
 }
 
 /// What a pass declares about itself.
 #[derive(Clone, Debug)]
 pub struct PassDesc {
-    pub name: &'static str,
-    /// Raster passes read their inputs in fragment shaders and write attachments.
-    pub raster: bool,
+    /// Unique in the frame; several instances of one pass type carry the signal they work on
+    /// (`svgf_atrous_diffuse_0`).
+    pub name: String,
+    pub kind: PassKind,
     /// Named images this pass reads (outputs of passes before it, or of itself last frame).
     pub inputs: Vec<String>,
     pub outputs: Vec<OutputDesc>,
@@ -106,7 +126,7 @@ impl Images {
 /// GPU time of one pass in the last frame.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PassTime {
-    pub pass: &'static str,
+    pub pass: String,
     pub gpu_ms: f64,
 }
 
@@ -133,13 +153,13 @@ impl Graph {
                     bail!("frame graph: output {} is written by two passes", o.name);
                 }
                 let usage = match o.usage {
-                    Usage::Storage => vk::ImageUsageFlags::STORAGE,
+                    Usage::Storage | Usage::Transfer => vk::ImageUsageFlags::STORAGE,
                     Usage::ColorAttachment => vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE,
                     Usage::DepthAttachment => vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
                 } | vk::ImageUsageFlags::SAMPLED
                     | vk::ImageUsageFlags::TRANSFER_SRC
                     | vk::ImageUsageFlags::TRANSFER_DST;
-                let image = Image::new(ctx, &o.name, o.format, extent, 1, usage)?;
+                let image = Image::new(ctx, &o.name, o.format, o.extent.unwrap_or(extent), 1, usage)?;
                 map.insert(o.name.clone(), (image, o.clone()));
                 output_order.push(o.name.clone());
             }
@@ -164,16 +184,24 @@ impl Graph {
         })
     }
 
-    pub fn pass_names(&self) -> Vec<&'static str> {
-        self.descs.iter().map(|d| d.name).collect()
+    pub fn pass_names(&self) -> Vec<&str> {
+        self.descs.iter().map(|d| d.name.as_str()).collect()
     }
 
     /// Records every pass with barriers and timestamps into `rec`.
     pub fn record(&mut self, rec: &Recorder, scene: &SceneGpu, frame_index: u32) -> Result<()> {
         if !self.initialised {
-            for (image, _) in self.images.map.values() {
+            // Everything starts at zero: history images are read before their first write.
+            for (image, desc) in self.images.map.values() {
                 rec.init_general(image);
+                if desc.usage != Usage::DepthAttachment {
+                    rec.clear_image(image);
+                }
             }
+            rec.memory_barrier(
+                (vk::PipelineStageFlags2::CLEAR, vk::AccessFlags2::TRANSFER_WRITE),
+                (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE),
+            );
             self.initialised = true;
         }
         self.timestamps.reset(rec.cmd);
@@ -181,7 +209,7 @@ impl Graph {
         for (i, pass) in self.passes.iter_mut().enumerate() {
             let desc = &self.descs[i];
             let reads: Vec<(&str, Access)> =
-                desc.inputs.iter().map(|n| (n.as_str(), Access::read(desc.raster))).collect();
+                desc.inputs.iter().map(|n| (n.as_str(), Access::read(desc.kind))).collect();
             let writes: Vec<(&str, Access)> =
                 desc.outputs.iter().map(|o| (o.name.as_str(), Access::write(o.usage))).collect();
             sync::barrier(rec, &mut self.sync, &reads, &writes);
@@ -206,7 +234,7 @@ impl Graph {
                 .descs
                 .iter()
                 .enumerate()
-                .map(|(i, d)| PassTime { pass: d.name, gpu_ms: ts[2 * i + 1] - ts[2 * i] })
+                .map(|(i, d)| PassTime { pass: d.name.clone(), gpu_ms: ts[2 * i + 1] - ts[2 * i] })
                 .collect(),
             None => Vec::new(),
         }
@@ -217,8 +245,8 @@ impl Graph {
     }
 
     /// The producing pass of an output.
-    pub fn producer(&self, name: &str) -> Option<&'static str> {
-        self.descs.iter().find(|d| d.outputs.iter().any(|o| o.name == name)).map(|d| d.name)
+    pub fn producer(&self, name: &str) -> Option<&str> {
+        self.descs.iter().find(|d| d.outputs.iter().any(|o| o.name == name)).map(|d| d.name.as_str())
     }
 }
 

@@ -3,7 +3,7 @@
 //! (read-after-write, write-after-write, write-after-read). Images stay in GENERAL layout, so
 //! no layout transitions are needed after their first use.
 
-use super::Usage;
+use super::{PassKind, Usage};
 use crate::gpu::{Recorder, vk};
 use std::collections::HashMap;
 
@@ -17,14 +17,25 @@ pub struct Access {
 }
 
 impl Access {
-    pub fn read(raster: bool) -> Self {
-        let stage = if raster { Stage::FRAGMENT_SHADER } else { Stage::COMPUTE_SHADER };
-        Self { stage, access: Acc::SHADER_STORAGE_READ | Acc::SHADER_SAMPLED_READ }
+    pub fn read(kind: PassKind) -> Self {
+        match kind {
+            PassKind::Compute => {
+                Self { stage: Stage::COMPUTE_SHADER, access: Acc::SHADER_STORAGE_READ | Acc::SHADER_SAMPLED_READ }
+            }
+            PassKind::Raster => {
+                Self { stage: Stage::FRAGMENT_SHADER, access: Acc::SHADER_STORAGE_READ | Acc::SHADER_SAMPLED_READ }
+            }
+            PassKind::Transfer => Self::transfer_read(),
+        }
     }
 
     pub fn write(usage: Usage) -> Self {
         match usage {
-            Usage::Storage => Self { stage: Stage::COMPUTE_SHADER, access: Acc::SHADER_STORAGE_WRITE },
+            // Read too: atomics (the SVGF rejection counter) read what they write.
+            Usage::Storage => {
+                Self { stage: Stage::COMPUTE_SHADER, access: Acc::SHADER_STORAGE_WRITE | Acc::SHADER_STORAGE_READ }
+            }
+            Usage::Transfer => Self { stage: Stage::COPY, access: Acc::TRANSFER_WRITE },
             Usage::ColorAttachment => Self {
                 stage: Stage::COLOR_ATTACHMENT_OUTPUT,
                 access: Acc::COLOR_ATTACHMENT_WRITE | Acc::COLOR_ATTACHMENT_READ,

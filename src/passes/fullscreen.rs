@@ -3,7 +3,7 @@
 
 use super::PassBuilder;
 use crate::gpu::{Binding, BindingKind, DescriptorSetLayout, Pipeline, PushResource, Sampler, SamplerDesc};
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc};
+use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind};
 use anyhow::Result;
 
 /// How a shader reads an input image.
@@ -16,7 +16,7 @@ pub enum Read {
 }
 
 pub struct FullscreenPass {
-    name: &'static str,
+    name: String,
     pipeline: Pipeline,
     _set_layout: DescriptorSetLayout,
     sampler: Sampler,
@@ -32,7 +32,7 @@ pub const GROUP: (u32, u32) = (8, 8);
 impl FullscreenPass {
     pub fn new(
         b: &PassBuilder,
-        name: &'static str,
+        name: &str,
         shader_key: &str,
         inputs: Vec<(String, Read)>,
         outputs: Vec<OutputDesc>,
@@ -51,15 +51,15 @@ impl FullscreenPass {
         let pipeline =
             Pipeline::compute(b.ctx, name, &spirv, &[&b.scene.set_layout, &set_layout], push_constants.len() as u32)?;
         let sampler = Sampler::new(b.ctx, SamplerDesc::LINEAR_CLAMP)?;
-        Ok(Self { name, pipeline, _set_layout: set_layout, sampler, inputs, outputs, push_constants })
+        Ok(Self { name: name.to_string(), pipeline, _set_layout: set_layout, sampler, inputs, outputs, push_constants })
     }
 }
 
 impl Pass for FullscreenPass {
     fn desc(&self) -> PassDesc {
         PassDesc {
-            name: self.name,
-            raster: false,
+            name: self.name.clone(),
+            kind: PassKind::Compute,
             inputs: self.inputs.iter().map(|(n, _)| n.clone()).collect(),
             outputs: self.outputs.clone(),
         }

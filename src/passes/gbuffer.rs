@@ -3,7 +3,7 @@
 
 use super::PassBuilder;
 use crate::gpu::{Pipeline, RasterDesc, vk};
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, Preview, Usage};
+use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Usage};
 use anyhow::Result;
 
 pub const NAME: &str = "gbuffer";
@@ -11,7 +11,8 @@ pub const NAME: &str = "gbuffer";
 /// The colour outputs in attachment order (matching `layout(location = N)` in gbuffer.frag),
 /// with their formats, previews and the clear value meaning "no surface".
 const OUTPUTS: [(&str, vk::Format, Preview); 8] = [
-    ("depth", vk::Format::R32_SFLOAT, Preview::Depth),
+    // View depth and its screen-space derivative (fwidth), for the denoisers' depth tests.
+    ("depth", vk::Format::R32G32_SFLOAT, Preview::Depth),
     ("normal_geo", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
     ("normal", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
     ("base_color", vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
@@ -83,6 +84,7 @@ impl Pass for GbufferPass {
                 format: *f,
                 usage: Usage::ColorAttachment,
                 preview: *p,
+                extent: None,
             })
             .collect();
         outputs.push(OutputDesc {
@@ -90,8 +92,9 @@ impl Pass for GbufferPass {
             format: vk::Format::D32_SFLOAT,
             usage: Usage::DepthAttachment,
             preview: Preview::Scalar,
+            extent: None,
         });
-        PassDesc { name: NAME, raster: true, inputs: Vec::new(), outputs }
+        PassDesc { name: NAME.into(), kind: PassKind::Raster, inputs: Vec::new(), outputs }
     }
 
     fn record(&mut self, ctx: &PassContext) -> Result<()> {

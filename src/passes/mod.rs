@@ -5,8 +5,13 @@
 pub mod composite;
 pub mod fullscreen;
 pub mod gbuffer;
+pub mod history;
+pub mod inject;
+pub mod pathtrace;
 pub mod primary_rays;
 pub mod shadows;
+pub mod svgf;
+pub mod taa;
 pub mod tonemap;
 
 use crate::gpu::{Context, ShaderLibrary};

@@ -2,11 +2,15 @@
 //! advances animation, updates the camera and records, submits and times one frame.
 
 pub mod camera;
+pub mod environment;
+pub mod frame;
+pub mod lights;
 mod mips;
 pub mod ray_batch;
 pub mod scene_gpu;
 
 pub use camera::{CameraChoice, View};
+pub use environment::Environment;
 pub use scene_gpu::{FrameUniforms, SceneGpu};
 
 use crate::backend::Backend;
@@ -16,7 +20,7 @@ use crate::image_io::CpuImage;
 use crate::passes::{self, PassBuilder};
 use crate::scene::{Pose, Scene};
 use anyhow::{Result, bail};
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use std::sync::Arc;
 
 /// What the frame looks like, independent of the scene.
@@ -26,14 +30,37 @@ pub struct Settings {
     pub height: u32,
     /// Exposure multiplier applied before tonemapping.
     pub exposure: f32,
-    /// Radiance of the constant sky seen where rays and pixels hit nothing.
-    pub sky: Vec3,
+    /// What rays and pixels that leave the scene see (the hybrid frame shows a map's mean).
+    pub environment: Environment,
     /// Animation time step between frames, seconds.
     pub frame_dt: f32,
     /// Animation time of frame 0, seconds.
     pub start_time: f32,
     /// Add the primary_rays pass (a check of the ray backends against the G-buffer).
     pub primary_rays: bool,
+    /// Temporal anti-aliasing (jittered G-buffer) before tonemapping.
+    pub taa: bool,
+    /// The denoiser's settings.
+    pub denoise: crate::passes::svgf::SvgfSettings,
+    /// Tests: a CPU-provided image `inject.signal` goes through an SVGF chain of its own.
+    pub test_signal: bool,
+    pub mode: RenderMode,
+}
+
+/// Which frame the renderer builds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RenderMode {
+    /// The real-time frame: G-buffer, ray-traced passes, composite, tonemap.
+    #[default]
+    Hybrid,
+    /// The progressive path tracer (pathtrace, tonemap) at a frozen pose: frame n adds
+    /// sample n to every pixel.
+    Reference {
+        /// Mixed with the frame index into every pixel's random stream.
+        seed: u32,
+        /// Scattering events per path at most (1 = direct light only).
+        max_bounces: u32,
+    },
 }
 
 impl Default for Settings {
@@ -42,17 +69,20 @@ impl Default for Settings {
             width: 640,
             height: 360,
             exposure: 1.0,
-            sky: Vec3::splat(0.0),
+            environment: Environment::default(),
             frame_dt: 1.0 / 30.0,
             start_time: 0.0,
             primary_rays: false,
+            taa: false,
+            denoise: Default::default(),
+            test_signal: false,
+            mode: RenderMode::Hybrid,
         }
     }
 }
 
-/// Names of the images a frame produces for display.
+/// The 8-bit, display-encoded image of a frame.
 pub const DISPLAY_OUTPUT: &str = passes::tonemap::COLOR;
-pub const HDR_OUTPUT: &str = passes::composite::COLOR;
 
 pub struct Renderer {
     pub ctx: Arc<Context>,
@@ -69,6 +99,11 @@ pub struct Renderer {
     pub last_pass_times: Vec<PassTime>,
     /// The ray-list tracer, made on first use.
     ray_batch: Option<ray_batch::RayBatch>,
+    /// Images the CPU feeds into the frame (tests), by output name.
+    injected: std::collections::HashMap<String, passes::inject::Texels>,
+    hdr_output: String,
+    /// The next frame starts all temporal histories anew.
+    cut_pending: bool,
 }
 
 impl Renderer {
@@ -90,17 +125,25 @@ impl Renderer {
             );
         }
         let camera = camera::resolve(&scene, camera)?;
+        let environment = environment::EnvironmentData::load(&settings.environment)?;
         let pool = CommandPool::new(ctx)?;
         let pose = scene.evaluate(settings.start_time);
-        let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend)?;
+        let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment)?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
-        let mut frame_passes: Vec<Box<dyn Pass>> = vec![Box::new(passes::gbuffer::new(&b)?)];
-        if settings.primary_rays {
-            frame_passes.push(Box::new(passes::primary_rays::new(&b)?));
-        }
-        frame_passes.push(Box::new(passes::shadows::new(&b)?));
-        frame_passes.push(Box::new(passes::composite::new(&b)?));
-        frame_passes.push(Box::new(passes::tonemap::new(&b, HDR_OUTPUT)?));
+        let (frame_passes, injected, hdr_output): (Vec<Box<dyn Pass>>, _, String) = match settings.mode {
+            RenderMode::Hybrid => {
+                let f = frame::hybrid(&b, &settings)?;
+                (f.passes, f.injected, f.hdr_output)
+            }
+            RenderMode::Reference { seed, max_bounces } => (
+                vec![
+                    Box::new(passes::pathtrace::new(&b, seed, max_bounces)?),
+                    Box::new(passes::tonemap::new(&b, passes::pathtrace::COLOR)?),
+                ],
+                Default::default(),
+                passes::pathtrace::COLOR.to_string(),
+            ),
+        };
         let extent = vk::Extent2D { width: settings.width, height: settings.height };
         let graph = Graph::new(ctx, frame_passes, extent)?;
         Ok(Self {
@@ -116,11 +159,35 @@ impl Renderer {
             last_view: None,
             last_pass_times: Vec::new(),
             ray_batch: None,
+            injected,
+            hdr_output,
+            cut_pending: false,
         })
     }
 
     pub fn time_of(&self, frame: u32) -> f32 {
+        if let RenderMode::Reference { .. } = self.settings.mode {
+            // Every sample of a reference must see the same scene.
+            return self.settings.start_time;
+        }
         self.settings.start_time + frame as f32 * self.settings.frame_dt
+    }
+
+    /// The linear HDR image of the frame (before tonemapping).
+    pub fn hdr_output(&self) -> &str {
+        &self.hdr_output
+    }
+
+    /// The next frame is a camera cut: temporal passes drop their history.
+    pub fn camera_cut(&mut self) {
+        self.cut_pending = true;
+    }
+
+    /// The RGBA texels an injected image (`inject.NAME`) will show from the next frame on.
+    pub fn inject(&self, name: &str, texels: Vec<[f32; 4]>) -> Result<()> {
+        let slot = self.injected.get(name).ok_or_else(|| anyhow::anyhow!("no injected image named {name}"))?;
+        *slot.lock().map_err(|_| anyhow::anyhow!("injected image poisoned"))? = texels;
+        Ok(())
     }
 
     pub fn pose_of(&self, frame: u32) -> Pose {
@@ -147,6 +214,7 @@ impl Renderer {
             graph.record(&rec, scene_gpu, frame)
         })?;
         self.last_pass_times = self.graph.pass_times();
+        self.cut_pending = false;
         self.prev_view = Some(view);
         self.last_view = Some(view);
         self.frame_index += 1;
@@ -157,6 +225,8 @@ impl Renderer {
         let size = Vec2::new(self.settings.width as f32, self.settings.height as f32);
         let prev = self.prev_view.unwrap_or(*view);
         let vp = view.view_proj();
+        let jitter = if self.settings.taa { passes::taa::jitter(frame) } else { [0.0; 2] };
+        let reset = frame == 0 || self.cut_pending;
         FrameUniforms {
             view: view.view.to_cols_array_2d(),
             proj: view.proj.to_cols_array_2d(),
@@ -164,7 +234,7 @@ impl Renderer {
             inv_view_proj: vp.inverse().to_cols_array_2d(),
             inv_view: view.view.inverse().to_cols_array_2d(),
             prev_view_proj: prev.view_proj().to_cols_array_2d(),
-            jittered_view_proj: view.jittered_view_proj(Vec2::ZERO, size).to_cols_array_2d(),
+            jittered_view_proj: view.jittered_view_proj(Vec2::from(jitter), size).to_cols_array_2d(),
             camera_pos: view.position.to_array(),
             znear: view.znear,
             prev_camera_pos: prev.position.to_array(),
@@ -172,11 +242,12 @@ impl Renderer {
             size: [self.settings.width, self.settings.height],
             frame_index: frame,
             light_count: self.scene.lights.len() as u32,
-            jitter: [0.0; 2],
+            jitter,
             time,
             exposure: self.settings.exposure,
-            sky_color: self.settings.sky.to_array(),
+            sky_color: self.scene_gpu.light_tables.sky.to_array(),
             instance_count: self.scene.instances.len() as u32,
+            flags: if reset { scene_gpu::FRAME_RESET_HISTORY } else { 0 },
         }
     }
 

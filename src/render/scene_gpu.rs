@@ -3,6 +3,8 @@
 //! (set 0) every pass binds. Geometry and textures are uploaded once; the instance table and
 //! the lights are rewritten each frame from the animated pose.
 
+use super::environment::EnvironmentData;
+use super::lights::{self, LightTables};
 use crate::accel::{self, RayAccel};
 use crate::backend::Backend;
 use crate::gpu::{
@@ -26,6 +28,13 @@ pub mod binding {
     pub const MATERIALS: u32 = 5;
     pub const LIGHTS: u32 = 6;
     pub const TEXTURES: u32 = 7;
+    // 8..11: the ray backend (src/accel).
+    // 12..16: light sampling (src/render/lights.rs, shaders-glsl/common/light_sampling.glsl).
+    pub const LIGHT_TABLE: u32 = 12;
+    pub const EMITTERS: u32 = 13;
+    pub const EMITTER_BASE: u32 = 14;
+    pub const ENV_TEXELS: u32 = 15;
+    pub const ENV_CDF: u32 = 16;
 }
 
 #[repr(C)]
@@ -111,7 +120,11 @@ pub struct FrameUniforms {
     pub exposure: f32,
     pub sky_color: [f32; 3],
     pub instance_count: u32,
+    pub flags: u32,
 }
+
+/// `FrameUniforms::flags`: the first frame, or a camera cut: no temporal history is valid.
+pub const FRAME_RESET_HISTORY: u32 = 1;
 
 pub struct SceneGpu {
     pub vertices: Buffer,
@@ -129,6 +142,7 @@ pub struct SceneGpu {
     pub set_layout: DescriptorSetLayout,
     pub set: DescriptorSet,
     pub accel: Box<dyn RayAccel>,
+    pub light_tables: LightTables,
     prev_world: Option<Vec<Mat4>>,
 }
 
@@ -143,6 +157,7 @@ impl SceneGpu {
         scene: &Scene,
         pose: &Pose,
         backend: Backend,
+        environment: &EnvironmentData,
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Acceleration-structure builds read the geometry by device address.
@@ -211,6 +226,8 @@ impl SceneGpu {
         let accel = accel::create(backend, ctx, pool, scene, pose, &geometry)?;
         let mut bindings = scene_bindings(texture_bindings.len() as u32);
         bindings.extend(accel.bindings());
+        bindings.extend(lights::bindings());
+        let light_tables = LightTables::new(ctx, pool, scene, pose, environment)?;
         let set_layout = DescriptorSetLayout::new(ctx, &bindings, false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;
         set.write_buffer(binding::FRAME, BindingKind::UniformBuffer, &frame);
@@ -222,6 +239,7 @@ impl SceneGpu {
         set.write_buffer(binding::LIGHTS, BindingKind::StorageBuffer, &lights);
         set.write_sampled_images(binding::TEXTURES, &texture_bindings);
         accel.write_set(&set);
+        light_tables.write_set(&set);
 
         let mut gpu = Self {
             vertices,
@@ -238,6 +256,7 @@ impl SceneGpu {
             set_layout,
             set,
             accel,
+            light_tables,
             prev_world: None,
         };
         gpu.update_pose(scene, pose)?;
@@ -269,6 +288,7 @@ impl SceneGpu {
         let lights: Vec<GpuLight> = scene.lights.iter().map(|l| gpu_light(l, &pose.world[l.node as usize])).collect();
         self.lights.write(0, bytemuck::cast_slice(&lights))?;
         self.accel.update_instances(scene, pose)?;
+        self.light_tables.update(scene, pose)?;
         self.prev_world = Some(pose.world.clone());
         Ok(())
     }

@@ -20,6 +20,7 @@ use gltf::json::accessor::{ComponentType, Type};
 use gltf::json::validation::Checked;
 use serde_json::Value;
 use std::borrow::Cow;
+use std::cell::Cell;
 use std::collections::HashSet;
 use std::io::Cursor;
 use std::path::{Component, Path, PathBuf};
@@ -80,11 +81,13 @@ struct Ctx<'a> {
     warnings: Vec<String>,
     /// Keys of warnings that are given once per scene rather than once per occurrence.
     warned: HashSet<&'static str>,
+    /// Bytes loaded from URIs so far, for `max_total_bytes`.
+    uri_bytes: Cell<u64>,
 }
 
 impl<'a> Ctx<'a> {
     fn new(file: &'a Path, opts: &'a LoadOptions) -> Self {
-        Self { file, opts, warnings: Vec::new(), warned: HashSet::new() }
+        Self { file, opts, warnings: Vec::new(), warned: HashSet::new(), uri_bytes: Cell::new(0) }
     }
 
     fn limits(&self) -> &Limits {
@@ -271,10 +274,14 @@ fn read_file(ctx: &Ctx, file: &Path, what: &str) -> Result<Vec<u8>, SceneError> 
 
 /// The bytes a buffer or image URI refers to.
 fn load_uri(ctx: &Ctx, uri: &str, path: &str) -> Result<Vec<u8>, SceneError> {
-    match uri.strip_prefix("data:") {
-        Some(data) => decode_data_uri(ctx, data, path),
-        None => read_file(ctx, &resolve_uri(ctx, uri, path)?, path),
-    }
+    let bytes = match uri.strip_prefix("data:") {
+        Some(data) => decode_data_uri(ctx, data, path)?,
+        None => read_file(ctx, &resolve_uri(ctx, uri, path)?, path)?,
+    };
+    ctx.uri_bytes.set(ctx.uri_bytes.get() + bytes.len() as u64);
+    let what = format!("{path}: bytes loaded from URIs so far");
+    ctx.check(&what, "max_total_bytes", ctx.uri_bytes.get(), ctx.limits().max_total_bytes)?;
+    Ok(bytes)
 }
 
 /// Accepts padded and unpadded base64: exporters differ.
@@ -858,6 +865,7 @@ struct Builder<'a> {
     default_material: Option<u32>,
     total_vertices: u64,
     total_triangles: u64,
+    total_animation_keys: u64,
 }
 
 impl<'a> Builder<'a> {
@@ -873,6 +881,7 @@ impl<'a> Builder<'a> {
             default_material: None,
             total_vertices: 0,
             total_triangles: 0,
+            total_animation_keys: 0,
         }
     }
 
@@ -1253,6 +1262,15 @@ impl Builder<'_> {
     fn attach_mesh(&mut self, i: usize, node: &json::Node, mesh: usize, scene_index: u32) -> Result<(), SceneError> {
         let primitives = self.mesh(mesh, &format!("nodes[{i}].mesh"))?;
         let targets = self.gpu_instances(i, node, scene_index)?.unwrap_or_else(|| vec![scene_index]);
+        let drawn = primitives.iter().flatten().count() as u64;
+        let instances = (self.scene.instances.len() as u64).saturating_add(drawn.saturating_mul(targets.len() as u64));
+        let limit = self.ctx.limits().max_instances;
+        self.ctx.check(
+            &format!("nodes[{i}]: mesh instances in the scene so far"),
+            "max_instances",
+            instances,
+            limit,
+        )?;
         for &node in &targets {
             for &mesh in primitives.iter().flatten() {
                 self.scene.instances.push(Instance { mesh, node });
@@ -1650,6 +1668,12 @@ impl Builder<'_> {
                  lacks; using an arbitrary tangent frame"
             ));
             tangents::orthonormal_tangents(vertices);
+        } else if !tangents::mikktspace_is_tractable(vertices, indices) {
+            self.ctx.warn(format!(
+                "{path}: too many triangle corners share a position for MikkTSpace to finish in \
+                 reasonable time; using an arbitrary tangent frame"
+            ));
+            tangents::orthonormal_tangents(vertices);
         } else if !tangents::mikktspace_tangents(vertices, indices, uv_set) {
             self.ctx.warn(format!("{path}: MikkTSpace tangent generation failed; using an arbitrary tangent frame"));
             tangents::orthonormal_tangents(vertices);
@@ -1759,6 +1783,7 @@ impl Builder<'_> {
         let spath = format!("animations[{a}].samplers[{s}]");
         let times = read_floats::<1>(&self.ctx, &self.data, sampler.input.value(), &format!("{spath}.input"))?;
         let times: Vec<f32> = times.into_iter().map(|[t]| t).collect();
+        self.count_animation_keys(times.len(), &spath)?;
         let output = sampler.output.value();
         let opath = format!("{spath}.output");
         let values: Vec<Vec4> = match property {
@@ -1770,6 +1795,7 @@ impl Builder<'_> {
                 .map(|v| Vec3::from(v).extend(0.0))
                 .collect(),
         };
+        self.count_animation_keys(values.len(), &spath)?;
         let channel = Channel { node, property, interpolation, times, values };
         match channel_defect(&channel) {
             Some(defect) => {
@@ -1778,6 +1804,16 @@ impl Builder<'_> {
             }
             None => Ok(Some(channel)),
         }
+    }
+}
+
+impl Builder<'_> {
+    /// Adds keyframe times or values to the scene total and checks the limit.
+    fn count_animation_keys(&mut self, added: usize, path: &str) -> Result<(), SceneError> {
+        self.total_animation_keys += added as u64;
+        let limit = self.ctx.limits().max_animation_keys;
+        let what = format!("{path}: animation keys in the scene so far");
+        self.ctx.check(&what, "max_animation_keys", self.total_animation_keys, limit)
     }
 }
 
@@ -2645,7 +2681,7 @@ mod tests {
         std::fs::write(dir.join("t.png"), png_2x2([0; 4])).unwrap();
         let path = g.write_gltf(&dir, "lim");
         let embedded = g.write_embedded(&dir, "emb");
-        let cases: [Case<Limits>; 9] = [
+        let cases: [Case<Limits>; 11] = [
             ("indices", |l| l.max_triangles = 0, "3 exceeds the limit 3 * max_triangles + 2 = 2"),
             ("triangles", |l| l.max_triangles = 1, "so far: 2 exceeds the limit max_triangles = 1"),
             ("elements", |l| l.max_vertices = 2, "count: 3 exceeds the limit max_vertices = 2"),
@@ -2653,6 +2689,13 @@ mod tests {
             ("nodes", |l| l.max_nodes = 1, "node count: 2 exceeds the limit max_nodes = 1"),
             ("depth", |l| l.max_node_depth = 1, "depth: 2 exceeds the limit max_node_depth = 1"),
             ("buffer", |l| l.max_buffer_bytes = 10, "exceeds the limit max_buffer_bytes = 10"),
+            (
+                "instances",
+                |l| l.max_instances = 1,
+                "instances in the scene so far: 2 exceeds the limit max_instances = 1",
+            ),
+            // The 42-byte buffer fits; with the 86-byte image the total does not.
+            ("total", |l| l.max_total_bytes = 50, "images[0].uri: bytes loaded from URIs so far: 128 exceeds"),
             ("texture", |l| l.max_texture_dimension = 1, "2 exceeds the limit max_texture_dimension = 1"),
             ("texels", |l| l.max_texture_pixels_total = 3, "4 exceeds the limit max_texture_pixels_total = 3"),
         ];

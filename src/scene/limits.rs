@@ -23,12 +23,23 @@ pub struct Limits {
     pub max_texture_pixels_total: u64,
     /// Bytes of any one buffer, image file, or the scene file itself (default 512 MiB).
     pub max_buffer_bytes: u64,
+    /// Bytes of all buffers and images loaded from URIs together, a file counting as often
+    /// as it is referred to (default 4 GiB): without it, a file listing one big neighbour
+    /// as a buffer a thousand times would need a thousand copies of it.
+    pub max_total_bytes: u64,
     /// Depth of the node hierarchy, roots at depth 1 (default 64).
     pub max_node_depth: u32,
     /// Nodes, including those created for GPU-instanced copies (default 1 M).
     pub max_nodes: u32,
     /// Encoded length of any one `data:` URI (default 256 MiB).
     pub max_data_uri_bytes: u64,
+    /// Mesh instances, one per primitive of every node that draws a mesh, GPU-instanced
+    /// copies included (default 4 M). Nodes times primitives: a small file could ask for
+    /// billions.
+    pub max_instances: u64,
+    /// Keyframe times and values over all animation channels (default 16 M). Channels may
+    /// share accessors, so their total is not bounded by the size of any one of them.
+    pub max_animation_keys: u64,
 }
 
 impl Default for Limits {
@@ -39,24 +50,30 @@ impl Default for Limits {
             max_texture_dimension: 16384,
             max_texture_pixels_total: 512 << 20,
             max_buffer_bytes: 512 << 20,
+            max_total_bytes: 4 << 30,
             max_node_depth: 64,
             max_nodes: 1_000_000,
             max_data_uri_bytes: 256 << 20,
+            max_instances: 4_000_000,
+            max_animation_keys: 16_000_000,
         }
     }
 }
 
 /// The command-line flag that sets each limit (`hybrid-rt render --help` lists them): an
 /// exceeded limit names its flag, so the user learns what to raise without reading the source.
-pub const FLAGS: [(&str, &str); 8] = [
+pub const FLAGS: [(&str, &str); 11] = [
     ("max_triangles", "--max-triangles"),
     ("max_vertices", "--max-vertices"),
     ("max_texture_dimension", "--max-texture-size"),
     ("max_texture_pixels_total", "--max-texture-pixels"),
     ("max_buffer_bytes", "--max-buffer-mib"),
+    ("max_total_bytes", "--max-total-mib"),
     ("max_node_depth", "--max-node-depth"),
     ("max_nodes", "--max-nodes"),
     ("max_data_uri_bytes", "--max-data-uri-mib"),
+    ("max_instances", "--max-instances"),
+    ("max_animation_keys", "--max-animation-keys"),
 ];
 
 /// Fails with an error naming the file, what was measured, the limit, both values and the
@@ -83,9 +100,12 @@ mod tests {
         assert_eq!(l.max_triangles, 20_000_000);
         assert_eq!(l.max_texture_dimension, 16384);
         assert_eq!(l.max_buffer_bytes, 512 * 1024 * 1024);
+        assert_eq!(l.max_total_bytes, 4 * 1024 * 1024 * 1024);
         assert_eq!(l.max_node_depth, 64);
         assert_eq!(l.max_nodes, 1_000_000);
         assert_eq!(l.max_data_uri_bytes, 256 * 1024 * 1024);
+        assert_eq!(l.max_instances, 4_000_000);
+        assert_eq!(l.max_animation_keys, 16_000_000);
     }
 
     #[test]

@@ -15,7 +15,7 @@ pub mod tangents;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
-pub use gltf_loader::{LoadOptions, load_gltf};
+pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_bytes};
 pub use limits::Limits;
 
 /// A scene-loading failure. The message always names the file and the problem.

@@ -78,6 +78,29 @@ pub fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32], uv_s
     true
 }
 
+/// Work MikkTSpace may do per triangle corner, in pairs of corners compared (see below).
+const MIKKTSPACE_PAIRS_PER_CORNER: u64 = 64;
+
+/// Below this many pairs MikkTSpace is fast whatever the mesh.
+const MIKKTSPACE_PAIRS_FLOOR: u64 = 1 << 24;
+
+/// Whether MikkTSpace finishes in time roughly proportional to the mesh's size.
+///
+/// It welds corners by comparing every pair that shares a position, and groups the triangles
+/// around a vertex by comparing every pair of them, so its time grows with the sum over
+/// positions of (corners at that position)². In real meshes a handful of corners share a
+/// position; a hostile one (all positions zero, or a fan of a million triangles) would keep
+/// it busy for hours. Positions are compared by value, so -0 and +0 count as one.
+pub fn mikktspace_is_tractable(vertices: &[Vertex], indices: &[u32]) -> bool {
+    let mut corners_at: HashMap<[u32; 3], u64> = HashMap::new();
+    for &i in indices {
+        let p = vertices.get(i as usize).map_or([0.0; 3], |v| v.position);
+        *corners_at.entry(p.map(|c| (c + 0.0).to_bits())).or_default() += 1;
+    }
+    let pairs: u64 = corners_at.values().map(|&k| k * k).sum();
+    pairs <= (indices.len() as u64 * MIKKTSPACE_PAIRS_PER_CORNER).max(MIKKTSPACE_PAIRS_FLOOR)
+}
+
 /// Gives each vertex the tangent of its corners, duplicating vertices whose corners differ.
 fn split_by_tangent(vertices: &mut Vec<Vertex>, indices: &mut [u32], corner_tangents: &[[f32; 4]]) {
     let mut assigned = vec![false; vertices.len()];
@@ -244,6 +267,22 @@ mod tests {
         assert!(mikktspace_tangents(&mut vertices, &mut indices, 1));
         let t = Vec4::from(vertices[0].tangent);
         assert!(t.truncate().abs_diff_eq(Vec3::Y, 1e-5), "{t:?}");
+    }
+
+    #[test]
+    fn mikktspace_is_refused_where_it_would_take_quadratic_time() {
+        // A 200 x 200 grid: every position is shared by at most six corners.
+        let n = 200;
+        let grid: Vec<Vertex> = (0..n * n).map(|i| vertex([(i % n) as f32, (i / n) as f32, 0.0], [0.0; 2])).collect();
+        let quads = (0..n - 1).flat_map(|y| (0..n - 1).map(move |x| y * n + x));
+        let indices: Vec<u32> = quads.flat_map(|i| [i, i + 1, i + n + 1, i, i + n + 1, i + n]).collect();
+        assert!(mikktspace_is_tractable(&grid, &indices));
+        // The same corners all at the origin (with -0 and +0 mixed): n^4 pairs.
+        let zero = |i: u32| if i % 2 == 0 { 0.0 } else { -0.0 };
+        let origin: Vec<Vertex> = (0..n * n).map(|i| vertex([zero(i), 0.0, 0.0], [0.0; 2])).collect();
+        assert!(!mikktspace_is_tractable(&origin, &indices));
+        // A small mesh is always fine, however degenerate.
+        assert!(mikktspace_is_tractable(&origin[..3], &indices[..3]));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! CPU reference traversal: the exact algorithm the compute fallback's GLSL runs.
 //!
-//! Written the way the shader is: fixed-size stacks, no recursion, one loop per level.
+//! Written the way the shader is: one fixed-size stack, no recursion, one loop for both
+//! levels taking the same steps in the same order (see [`trace`]).
 //!
 //! - **Nodes**: both child boxes are tested from one node fetch with a sign-selected slab test
 //!   (so an inverted box, min > max, is always missed); the far end of each box interval is
@@ -10,8 +11,9 @@
 //!   closest hit so far are dropped.
 //! - **Instances**: a top-level leaf transforms the ray by the instance's world-to-object rows
 //!   without normalising the direction, so `t` means the same in both spaces, and walks the
-//!   mesh's tree with a second stack. Instances whose mask shares no bit with the ray's are
-//!   skipped. Each level's stack needs at most [`STACK_SIZE`] entries.
+//!   mesh's tree on the same stack, above the top level's entries. Instances whose mask
+//!   shares no bit with the ray's are skipped. Each level pushes at most [`STACK_SIZE`]
+//!   entries.
 //! - **Triangles**: watertight test of Woop, Benthin and Wald 2013: translate the vertices to
 //!   the ray origin, permute so the direction's largest component is z (swapping x and y when
 //!   that component is negative, to keep the winding), shear so the ray runs along +z, then
@@ -25,9 +27,7 @@
 //!   accepts or ignores them; `any_hit` stops at the first accepted candidate.
 
 use super::SceneBvh;
-use super::layout::{
-    BlasPool, BvhInstance, BvhNode, BvhTriangle, ChildRef, STACK_SIZE, transform_point, transform_vector,
-};
+use super::layout::{BvhInstance, BvhNode, BvhTriangle, ChildRef, STACK_SIZE, transform_point, transform_vector};
 use glam::Vec3;
 
 /// Widening of a box's far distance: 1 + 2*gamma(3) with gamma(n) = n*eps / (1 - n*eps) and
@@ -176,16 +176,20 @@ impl RaySpace {
     }
 }
 
+/// Entries of the one traversal stack both levels share: each tree pushes at most one entry
+/// per inner level.
+const TRAVERSAL_STACK: usize = 2 * STACK_SIZE;
+
 /// Fixed-size stack of (reference, entry distance), as in the shader.
 struct Stack {
-    refs: [u32; STACK_SIZE],
-    dist: [f32; STACK_SIZE],
+    refs: [u32; TRAVERSAL_STACK],
+    dist: [f32; TRAVERSAL_STACK],
     len: usize,
 }
 
 impl Stack {
     fn new() -> Self {
-        Self { refs: [0; STACK_SIZE], dist: [0.0; STACK_SIZE], len: 0 }
+        Self { refs: [0; TRAVERSAL_STACK], dist: [0.0; TRAVERSAL_STACK], len: 0 }
     }
 
     fn push(&mut self, r: ChildRef, t: f32) {
@@ -194,15 +198,16 @@ impl Stack {
         self.len += 1;
     }
 
-    /// Next entry that starts no farther than `tmax`.
-    fn pop(&mut self, tmax: f32) -> Option<ChildRef> {
-        while self.len > 0 {
+    /// Drops the top entries that start farther than `tmax`.
+    fn drop_farther(&mut self, tmax: f32) {
+        while self.len > 0 && self.dist[self.len - 1] > tmax {
             self.len -= 1;
-            if self.dist[self.len] <= tmax {
-                return Some(ChildRef(self.refs[self.len]));
-            }
         }
-        None
+    }
+
+    fn pop(&mut self) -> Option<ChildRef> {
+        self.len = self.len.checked_sub(1)?;
+        Some(ChildRef(self.refs[self.len]))
     }
 }
 
@@ -227,10 +232,26 @@ fn visit(node: &BvhNode, ray: &RaySpace, tmin: f32, tmax: f32, stack: &mut Stack
     }
 }
 
+/// The instance whose mesh the traversal is in.
+struct Inside<'a> {
+    instance: &'a BvhInstance,
+    /// Stack depth when it was entered: the entries below belong to the top level.
+    stack_base: usize,
+    /// The ray in its object space.
+    ray: RaySpace,
+}
+
 /// The closest (or, with `first_hit`, the first accepted) hit.
+///
+/// One loop walks both levels with one stack, as the shader does: each step tests the next
+/// triangle of the current leaf, or, with none left, pops (leaving the instance once only
+/// top-level entries remain), visits an inner node and starts the leaf it leads to. A
+/// top-level leaf is one instance: entering it switches to its object-space ray and its
+/// mesh's tree. The shader takes these steps in the same order (one of each kind per loop
+/// iteration, so that SIMD lanes at different levels advance together).
 fn trace(
     bvh: &SceneBvh,
-    ray: &RaySpace,
+    world: &RaySpace,
     tmin: f32,
     tmax: f32,
     mask: u32,
@@ -239,80 +260,70 @@ fn trace(
 ) -> Option<Hit> {
     let mut closest = Closest { t: tmax, hit: None };
     let mut stack = Stack::new();
+    let mut inside: Option<Inside> = None;
+    let mut triangles = 0..0;
     let mut current = Some(ChildRef::ROOT);
-    while let Some(r) = current {
-        if !r.is_leaf() {
-            current = visit(&bvh.tlas.nodes[r.node() as usize], ray, tmin, closest.t, &mut stack);
-            if current.is_some() {
-                continue;
-            }
-        } else {
-            for i in r.leaf_range() {
-                let instance = &bvh.tlas.instances[i as usize];
-                if instance.mask & mask == 0 {
-                    continue;
-                }
-                let local = ray.in_object_space(instance);
-                let found = trace_mesh(&bvh.blas, instance, &local, tmin, first_hit, &mut closest, &mut alpha);
-                if found && first_hit {
-                    return closest.hit;
+    loop {
+        if let (Some(i), Some(inst)) = (triangles.next(), &inside) {
+            let tri = &bvh.blas.triangles[(inst.instance.first_triangle + i) as usize];
+            if let Some((t, u, v, front_face)) = inst.ray.hit_triangle(tri, tmin, closest.t) {
+                let primitive = tri.primitive();
+                let instance = inst.instance.custom_index;
+                if !inst.instance.is_alpha_tested() || alpha(instance, primitive, u, v) {
+                    closest.t = t;
+                    closest.hit = Some(Hit { instance, primitive, t, u, v, front_face });
+                    if first_hit {
+                        return closest.hit;
+                    }
                 }
             }
         }
-        current = stack.pop(closest.t);
+        if !triangles.is_empty() {
+            continue;
+        }
+        let r = match current {
+            Some(r) => r,
+            None => {
+                stack.drop_farther(closest.t);
+                if inside.as_ref().is_some_and(|i| stack.len <= i.stack_base) {
+                    inside = None;
+                }
+                match stack.pop() {
+                    Some(r) => r,
+                    None => return closest.hit,
+                }
+            }
+        };
+        current = if r.is_leaf() {
+            Some(r)
+        } else {
+            let (nodes, ray) = match &inside {
+                Some(i) => (&bvh.blas.nodes[i.instance.root_node as usize..], &i.ray),
+                None => (&bvh.tlas.nodes[..], world),
+            };
+            visit(&nodes[r.node() as usize], ray, tmin, closest.t, &mut stack)
+        };
+        if let Some(leaf) = current.filter(|r| r.is_leaf()) {
+            current = None;
+            if inside.is_some() {
+                triangles = leaf.leaf_range();
+            } else {
+                debug_assert_eq!(leaf.leaf_range().len(), 1, "top-level leaves hold one instance");
+                let instance = &bvh.tlas.instances[leaf.leaf_range().start as usize];
+                if instance.mask & mask != 0 {
+                    let ray = world.in_object_space(instance);
+                    inside = Some(Inside { instance, stack_base: stack.len, ray });
+                    current = Some(ChildRef::ROOT);
+                }
+            }
+        }
     }
-    closest.hit
 }
 
 /// The closest accepted hit so far; `t` doubles as the ray's current far end.
 struct Closest {
     t: f32,
     hit: Option<Hit>,
-}
-
-/// Walks one instance's mesh tree with `ray` in object space; true if it accepted a hit.
-fn trace_mesh(
-    blas: &BlasPool,
-    instance: &BvhInstance,
-    ray: &RaySpace,
-    tmin: f32,
-    first_hit: bool,
-    closest: &mut Closest,
-    alpha: &mut impl FnMut(u32, u32, f32, f32) -> bool,
-) -> bool {
-    let nodes = &blas.nodes[instance.root_node as usize..];
-    let triangles = &blas.triangles[instance.first_triangle as usize..];
-    let mut found = false;
-    let mut stack = Stack::new();
-    let mut current = Some(ChildRef::ROOT);
-    while let Some(r) = current {
-        if !r.is_leaf() {
-            current = visit(&nodes[r.node() as usize], ray, tmin, closest.t, &mut stack);
-            if current.is_some() {
-                continue;
-            }
-        } else {
-            for i in r.leaf_range() {
-                let tri = &triangles[i as usize];
-                let Some((t, u, v, front_face)) = ray.hit_triangle(tri, tmin, closest.t) else {
-                    continue;
-                };
-                let primitive = tri.primitive();
-                if instance.is_alpha_tested() && !alpha(instance.custom_index, primitive, u, v) {
-                    continue;
-                }
-                let instance = instance.custom_index;
-                closest.t = t;
-                closest.hit = Some(Hit { instance, primitive, t, u, v, front_face });
-                found = true;
-                if first_hit {
-                    return true;
-                }
-            }
-        }
-        current = stack.pop(closest.t);
-    }
-    found
 }
 
 #[cfg(test)]

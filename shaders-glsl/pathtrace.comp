@@ -1,0 +1,139 @@
+#version 460
+// pathtrace: the reference. One path per pixel per frame, progressive and unbiased: camera rays
+// through random sub-pixel positions (box filter), at every vertex one light sample (next-event
+// estimation) and one BSDF sample, the two combined by multiple importance sampling with the
+// power heuristic wherever both can produce the same direction (emissive triangles, the
+// environment); lights that are not geometry (punctual, sphere, disk) are reached only by light
+// sampling and count with weight 1. Russian roulette from the fourth vertex on. Alpha-masked
+// surfaces pass through (the trace interface tests alpha). Samples are summed into
+// pathtrace.accum; pathtrace.color is the mean so far.
+#extension GL_GOOGLE_include_directive : require
+#include "common/trace.glsl"
+#include "common/brdf.glsl"
+#include "common/light_sampling.glsl"
+#include "common/gbuffer.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+// rgb: sum of all samples so far; a: number of samples.
+layout(set = 1, binding = 0, rgba32f) uniform image2D io_accum;
+// rgb: accum / samples (linear radiance).
+layout(set = 1, binding = 1, rgba32f) uniform writeonly image2D out_color;
+// Rays traced for this pixel so far (closest-hit and shadow rays): for rays/s and a map of
+// where paths are long.
+layout(set = 1, binding = 2, r32ui) uniform uimage2D io_rays;
+
+layout(push_constant) uniform Params {
+    // Mixed into every pixel's random stream with the frame index: same seed, same image.
+    uint seed;
+    // Scattering events per path at most; 1 = direct light only. Russian roulette ends paths
+    // long before any sensible cap, which exists so a closed white box cannot run forever.
+    uint max_bounces;
+} params;
+
+// Sample index = frame index: frame n adds sample n to every pixel.
+#define SALT_PATHTRACE 0x70617468u
+// Vertices before Russian roulette starts (camera hit = vertex 0).
+#define RR_START 3u
+// Ray lengths for lights at infinity (as the shadows pass).
+#define TRACE_FAR 1e6
+
+// Moves a ray origin off the surface it leaves along the geometric normal on the side the ray
+// goes: a few float ulps scaled with the coordinates' magnitude (Wächter and Binder, Ray
+// Tracing Gems ch. 6), so it works for scenes of any size without a scene-dependent epsilon.
+vec3 offset_ray(vec3 p, vec3 n) {
+    const float origin = 1.0 / 32.0;
+    const float float_scale = 1.0 / 65536.0;
+    const float int_scale = 256.0;
+    ivec3 of_i = ivec3(int_scale * n);
+    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + ivec3(p.x < 0.0 ? -of_i.x : of_i.x,
+                                                           p.y < 0.0 ? -of_i.y : of_i.y,
+                                                           p.z < 0.0 ? -of_i.z : of_i.z));
+    return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
+                abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
+                abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
+}
+
+float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
+
+// Shadow-ray length toward a light sample: stops just short of an emitter so that its own
+// triangle does not occlude it.
+float shadow_tmax(float dist) { return dist >= LIGHT_FAR ? TRACE_FAR : dist * (1.0 - 1e-4); }
+
+vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
+    vec3 origin = frame.camera_pos;
+    vec3 dir = camera_ray_dir(pixel);
+    vec3 throughput = vec3(1.0);
+    vec3 radiance = vec3(0.0);
+    // Density of the BSDF sample that made the current ray; 0 for the camera ray, whose hits
+    // on emitters are not also reachable by light sampling (no MIS).
+    float bsdf_pdf = 0.0;
+    for (uint vertex = 0u;; ++vertex) {
+        Hit h = trace_closest(origin, dir, 0.0, TRACE_FAR, RAY_MASK_ALL);
+        ++rays;
+        if (h.instance == NO_HIT) {
+            float w = bsdf_pdf > 0.0 ? mis_power(bsdf_pdf, light_pdf_environment(dir)) : 1.0;
+            radiance += throughput * env_eval(dir) * w;
+            break;
+        }
+        HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+        if (emitter_visible_side(h.instance, h.primitive, dir)) {
+            float w = bsdf_pdf > 0.0 ? mis_power(bsdf_pdf, light_pdf_emitter(h.instance, h.primitive, origin, s.position))
+                                     : 1.0;
+            radiance += throughput * s.mat.emissive * w;
+        }
+        if (vertex >= params.max_bounces) break;
+
+        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
+        vec3 v = -dir;
+        vec3 n = s.normal;
+        vec3 ng = s.normal_geo;
+        vec3 leave = offset_ray(s.position, ng);
+
+        // Next-event estimation. Directions below the geometric surface would start inside it.
+        NeeSample ls = light_sample(s.position, rng_next3(rng));
+        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0) {
+            vec3 f = brdf_eval_cos(m, n, v, ls.dir);
+            if (dot(f, f) > 0.0) {
+                ++rays;
+                if (!trace_any(leave, ls.dir, 0.0, shadow_tmax(ls.dist), RAY_MASK_ALL)) {
+                    float w = ls.pdf > 0.0 ? mis_power(ls.pdf, brdf_pdf(m, n, v, ls.dir)) : 1.0;
+                    radiance += throughput * f * ls.weight * w;
+                }
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        BrdfSample bs = brdf_sample(m, n, v, rng_next3(rng));
+        if (bs.pdf <= 0.0 || dot(bs.l, ng) <= 0.0) break;
+        throughput *= bs.weight;
+        bsdf_pdf = bs.pdf;
+        if (vertex >= RR_START) {
+            // Survival probability follows the throughput (capped so bright paths still end).
+            float q = clamp(max3(throughput), 0.05, 0.95);
+            if (rng_next(rng) >= q) break;
+            throughput /= q;
+        }
+        origin = leave;
+        dir = bs.l;
+    }
+    return radiance;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    uint sample_index = frame.frame_index;
+    Rng rng = rng_init(uvec2(px), sample_index, pcg_hash(params.seed) ^ SALT_PATHTRACE);
+    uint rays = 0u;
+    vec3 l = trace_path(vec2(px) + rng_next2(rng), rng, rays);
+    // A NaN or infinity would poison the pixel for the rest of the run: drop the sample (it
+    // still counts as taken, so the image stays an average over the same number of samples).
+    if (any(isnan(l)) || any(isinf(l))) l = vec3(0.0);
+    vec4 sum = sample_index == 0u ? vec4(0.0) : imageLoad(io_accum, px);
+    uint total_rays = sample_index == 0u ? 0u : imageLoad(io_rays, px).x;
+    sum += vec4(l, 1.0);
+    imageStore(io_accum, px, sum);
+    imageStore(out_color, px, vec4(sum.rgb / sum.a, 1.0));
+    imageStore(io_rays, px, uvec4(total_rays + rays));
+}

@@ -1,0 +1,123 @@
+#version 460
+// svgf_temporal: temporal accumulation of one demodulated signal (diffuse or specular). The
+// previous frame's filtered colour (the first a-trous iteration, copied by `history`), moments
+// and history length are reprojected through the motion vectors with bilinear taps that each
+// pass the validity test (on screen, same instance, depth, normal); the new frame is blended in
+// with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
+// counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood, so
+// neither poisons the history.
+#extension GL_GOOGLE_include_directive : require
+#include "common/scene.glsl"
+#include "common/gbuffer.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_signal;
+layout(set = 1, binding = 1, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 3, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_motion;
+layout(set = 1, binding = 5, rg32f) uniform readonly image2D prev_depth;
+layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal;
+layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
+layout(set = 1, binding = 8, rgba32f) uniform readonly image2D prev_color;
+layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
+layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_length;
+layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 12, rg32f) uniform writeonly image2D out_moments;
+layout(set = 1, binding = 13, r32f) uniform writeonly image2D out_length;
+// x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
+layout(set = 1, binding = 14, r32ui) uniform uimage2D rejected;
+
+#include "common/svgf.glsl"
+
+// The input sample with non-finite values removed (false when it was not finite).
+bool load_finite(ivec2 q, out vec3 c) {
+    c = imageLoad(in_signal, q).rgb;
+    if (finite3(c)) return true;
+    c = vec3(0.0);
+    return false;
+}
+
+// Scales `c` so its luminance is at most mean + k sigma of the 7x7 neighbourhood (surface
+// pixels only), which takes the energy out of fireflies before anything accumulates them.
+vec3 clamp_outlier(ivec2 px, vec3 c) {
+    // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
+    if (isinf(svgf.clamp_sigma)) return c;
+    float sum = 0.0, sum2 = 0.0, n = 0.0;
+    for (int dy = -3; dy <= 3; ++dy) {
+        for (int dx = -3; dx <= 3; ++dx) {
+            // The centre is left out, so a lone firefly cannot widen its own bound.
+            if (dx == 0 && dy == 0) continue;
+            ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
+            if (imageLoad(g_ids, q).x == NO_INSTANCE) continue;
+            vec3 s;
+            load_finite(q, s);
+            float l = luminance(s);
+            sum += l;
+            sum2 += l * l;
+            n += 1.0;
+        }
+    }
+    float mean = sum / max(n, 1.0);
+    float sigma = sqrt(max(0.0, sum2 / max(n, 1.0) - mean * mean));
+    float l = luminance(c);
+    float limit = mean + svgf.clamp_sigma * sigma;
+    return l > limit && l > 0.0 ? c * (limit / l) : c;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    uint id = imageLoad(g_ids, px).x;
+    if (id == NO_INSTANCE) {
+        imageStore(out_color, px, vec4(0.0));
+        imageStore(out_moments, px, vec4(0.0));
+        imageStore(out_length, px, vec4(0.0));
+        return;
+    }
+    vec3 c;
+    bool finite = load_finite(px, c);
+    if (!finite) imageAtomicAdd(rejected, ivec2(0), 1u);
+    c = clamp_outlier(px, c);
+
+    vec2 zf = imageLoad(g_depth, px).rg;
+    float z = zf.x;
+    vec3 n = imageLoad(g_normal, px).xyz;
+    float fw = zf.y;
+    // Where this pixel's surface was last frame, in continuous pixel coordinates.
+    vec2 prev_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
+    vec2 base = floor(prev_pos - 0.5);
+    vec2 f = prev_pos - 0.5 - base;
+    vec3 hist_c = vec3(0.0);
+    vec2 hist_m = vec2(0.0);
+    float hist_len = 0.0, wsum = 0.0;
+    bool reset = (frame.flags & FRAME_RESET_HISTORY) != 0u;
+    for (int i = 0; i < 4 && !reset; ++i) {
+        ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
+        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
+        if (!svgf_consistent(z, imageLoad(prev_depth, q).r, fw, n, imageLoad(prev_normal, q).xyz, id,
+                             imageLoad(prev_ids, q).x)) continue;
+        float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+        hist_c += w * imageLoad(prev_color, q).rgb;
+        hist_m += w * imageLoad(prev_moments, q).xy;
+        hist_len += w * imageLoad(prev_length, q).r;
+        wsum += w;
+    }
+    float l = luminance(c);
+    vec2 moments = vec2(l, l * l);
+    float len = 1.0;
+    if (wsum > 1e-3) {
+        hist_c /= wsum;
+        hist_m /= wsum;
+        len = min(hist_len / wsum + 1.0, svgf.history_cap);
+        float a = max(svgf.alpha, 1.0 / len);
+        float am = max(svgf.moments_alpha, 1.0 / len);
+        // A dropped (non-finite) sample leaves the history as it was.
+        c = finite ? mix(hist_c, c, a) : hist_c;
+        moments = finite ? mix(hist_m, moments, am) : hist_m;
+    }
+    imageStore(out_color, px, vec4(c, 1.0));
+    imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
+    imageStore(out_length, px, vec4(len));
+}

@@ -1,0 +1,66 @@
+#version 460
+// taa: temporal anti-aliasing of the composited HDR frame. The G-buffer was rasterised with a
+// sub-pixel jitter (Halton 2,3); the previous result is reprojected through the motion vectors
+// (bilinear), clamped to the YCoCg bounding box of this frame's 3x3 neighbourhood, and blended
+// with the new frame. Disocclusion is told by motion, not by instance id: where the surface
+// seen last frame at the reprojected spot moved differently from the one seen now, something
+// uncovered this pixel and the history is dropped. (An id test would also drop the history at
+// every silhouette, where the jitter alternates between two surfaces, and nothing would be
+// anti-aliased.)
+#extension GL_GOOGLE_include_directive : require
+#include "common/scene.glsl"
+#include "common/color.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_color;
+layout(set = 1, binding = 1, rg32f) uniform readonly image2D g_motion;
+layout(set = 1, binding = 2, rg32f) uniform readonly image2D prev_motion;
+layout(set = 1, binding = 3) uniform sampler2D prev_color;
+layout(set = 1, binding = 4, rgba32f) uniform writeonly image2D out_color;
+
+// Motion vectors differing by more than this many pixels belong to different surfaces.
+#define DISOCCLUSION_MOTION 0.5
+
+layout(push_constant) uniform TaaParams {
+    float blend;  // weight of the new frame
+} taa;
+
+vec3 to_ycocg(vec3 c) {
+    return vec3(dot(c, vec3(0.25, 0.5, 0.25)), dot(c, vec3(0.5, 0.0, -0.5)), dot(c, vec3(-0.25, 0.5, -0.25)));
+}
+
+vec3 from_ycocg(vec3 c) { return vec3(c.x + c.y - c.z, c.x + c.z, c.x - c.y - c.z); }
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    vec3 cur = imageLoad(in_color, px).rgb;
+    if ((frame.flags & FRAME_RESET_HISTORY) != 0u) {
+        imageStore(out_color, px, vec4(cur, 1.0));
+        return;
+    }
+    // Clamp box of the current neighbourhood, in YCoCg where it hugs colour better.
+    vec3 lo = vec3(1e30), hi = vec3(-1e30);
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
+            vec3 y = to_ycocg(imageLoad(in_color, q).rgb);
+            lo = min(lo, y);
+            hi = max(hi, y);
+        }
+    }
+    vec2 motion = imageLoad(g_motion, px).xy;
+    vec2 prev_pos = vec2(px) + 0.5 - motion;
+    bool valid = all(greaterThanEqual(prev_pos, vec2(0.0))) && all(lessThan(prev_pos, vec2(frame.size)));
+    if (valid) {
+        vec2 prev_surface_motion = imageLoad(prev_motion, ivec2(floor(prev_pos))).xy;
+        valid = length(prev_surface_motion - motion) <= DISOCCLUSION_MOTION;
+    }
+    vec3 result = cur;
+    if (valid) {
+        vec3 hist = to_ycocg(textureLod(prev_color, prev_pos / vec2(frame.size), 0.0).rgb);
+        result = mix(from_ycocg(clamp(hist, lo, hi)), cur, taa.blend);
+    }
+    imageStore(out_color, px, vec4(result, 1.0));
+}

@@ -1,0 +1,48 @@
+//! taa: temporal anti-aliasing of the composited HDR frame (shaders-glsl/taa.comp): jittered
+//! G-buffer, YCoCg neighbourhood clamp, history rejected on disocclusion (motion mismatch).
+
+use super::PassBuilder;
+use super::fullscreen::{FullscreenPass, Read};
+use super::history::{self, Kept};
+use crate::gpu::vk;
+use crate::graph::{OutputDesc, Preview};
+use anyhow::Result;
+
+pub const NAME: &str = "taa";
+pub const COLOR: &str = "taa.color";
+/// Weight of the new frame in the blend.
+pub const BLEND: f32 = 0.1;
+
+pub fn new(b: &PassBuilder, input: &str) -> Result<FullscreenPass> {
+    let inputs = vec![
+        (input.to_string(), Read::Texel),
+        ("gbuffer.motion".into(), Read::Texel),
+        (history::of("gbuffer.motion"), Read::Texel),
+        (history::of(COLOR), Read::Filtered),
+    ];
+    let outputs = vec![OutputDesc::storage(NAME, "color", vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, BLEND.to_le_bytes().to_vec())
+}
+
+/// What TAA needs from the previous frame: its result and the motion of what it showed.
+pub fn kept() -> Vec<Kept> {
+    vec![
+        Kept::new(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        Kept::new("gbuffer.motion", vk::Format::R32G32_SFLOAT, Preview::Motion),
+    ]
+}
+
+/// Halton (2, 3) sub-pixel offsets in [-0.5, 0.5), cycling over 16 frames.
+pub fn jitter(frame: u32) -> [f32; 2] {
+    let halton = |mut i: u32, base: u32| {
+        let (mut f, mut r) = (1.0f32, 0.0f32);
+        while i > 0 {
+            f /= base as f32;
+            r += f * (i % base) as f32;
+            i /= base;
+        }
+        r
+    };
+    let i = frame % 16 + 1;
+    [halton(i, 2) - 0.5, halton(i, 3) - 0.5]
+}

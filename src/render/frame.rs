@@ -1,0 +1,51 @@
+//! The hybrid frame's plan: which passes run, in which order, wired by name.
+//!
+//! gbuffer -> [primary_rays] -> shadows -> [denoised signals] -> composite -> [taa] -> tonemap
+//! -> history. `history` comes last: it keeps what the next frame's temporal passes reproject.
+
+use super::Settings;
+use crate::graph::Pass;
+use crate::passes::{self, PassBuilder, history, inject, svgf};
+use anyhow::Result;
+use std::collections::HashMap;
+
+/// The name of the test signal injected when `Settings::test_signal` is on.
+pub const TEST_SIGNAL: &str = "signal";
+
+pub struct HybridFrame {
+    pub passes: Vec<Box<dyn Pass>>,
+    /// Images the CPU provides (by output name), for tests.
+    pub injected: HashMap<String, inject::Texels>,
+    /// The linear HDR result.
+    pub hdr_output: String,
+}
+
+pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
+    let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(passes::gbuffer::new(b)?)];
+    let mut kept = history::gbuffer();
+    let mut injected = HashMap::new();
+    if settings.primary_rays {
+        passes.push(Box::new(passes::primary_rays::new(b)?));
+    }
+    passes.push(Box::new(passes::shadows::new(b)?));
+    if settings.test_signal {
+        let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
+        let (pass, texels) = inject::new(b.ctx, TEST_SIGNAL, extent)?;
+        let name = format!("{}.{TEST_SIGNAL}", inject::NAME);
+        passes.push(Box::new(pass));
+        let chain = svgf::chain(b, TEST_SIGNAL, &name, &settings.denoise)?;
+        passes.extend(chain.passes);
+        kept.extend(chain.kept);
+        injected.insert(name, texels);
+    }
+    passes.push(Box::new(passes::composite::new(b)?));
+    let mut hdr_output = passes::composite::COLOR.to_string();
+    if settings.taa {
+        passes.push(Box::new(passes::taa::new(b, &hdr_output)?));
+        kept.extend(passes::taa::kept());
+        hdr_output = passes::taa::COLOR.to_string();
+    }
+    passes.push(Box::new(passes::tonemap::new(b, &hdr_output)?));
+    passes.push(Box::new(history::new(kept)));
+    Ok(HybridFrame { passes, injected, hdr_output })
+}

