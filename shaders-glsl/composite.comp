@@ -1,12 +1,18 @@
 #version 460
-// composite: shades every G-buffer pixel with direct light from the punctual lights (shadowed
-// by shadows.visibility for the first four) and adds emission; pixels that hit nothing show the
-// sky colour. Output is linear HDR radiance.
+// composite: the hybrid frame in linear HDR radiance. Per G-buffer pixel:
+//   emission
+// + punctual lights (Lambert + GGX) times their ray-traced visibility (shadows_filter, first
+//   four lights; the rest unshadowed)
+// + the diffuse signal (gi: emitters, environment, one bounce; demodulated) times the diffuse
+//   albedo
+// + the specular signal (reflections).
+// Pixels that hit nothing show the environment.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/brdf.glsl"
 #include "common/lights.glsl"
 #include "common/gbuffer.glsl"
+#include "common/light_sampling.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -17,14 +23,16 @@ layout(set = 1, binding = 3, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_emissive;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 6, rgba16f) uniform readonly image2D shadow_visibility;
-layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D diffuse_signal;
+layout(set = 1, binding = 8, rgba32f) uniform readonly image2D specular_signal;
+layout(set = 1, binding = 9, rgba32f) uniform writeonly image2D out_color;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     uvec2 ids = imageLoad(g_ids, px).xy;
     if (ids.x == NO_INSTANCE) {
-        imageStore(out_color, px, vec4(frame.sky_color, 1.0));
+        imageStore(out_color, px, vec4(env_eval(camera_ray_dir(vec2(px) + 0.5 - frame.jitter)), 1.0));
         return;
     }
     float depth = imageLoad(g_depth, px).r;
@@ -41,5 +49,7 @@ void main() {
         float v_i = i < 4u ? vis[i] : 1.0;
         radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * v_i;
     }
+    radiance += brdf_diffuse_albedo(m) * imageLoad(diffuse_signal, px).rgb;
+    radiance += imageLoad(specular_signal, px).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

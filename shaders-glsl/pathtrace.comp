@@ -12,6 +12,7 @@
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
+#include "common/ray_offset.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -35,30 +36,10 @@ layout(push_constant) uniform Params {
 #define SALT_PATHTRACE 0x70617468u
 // Vertices before Russian roulette starts (camera hit = vertex 0).
 #define RR_START 3u
-// Ray lengths for lights at infinity (as the shadows pass).
+// Longest closest-hit ray (as shadow_ray_tmax for lights at infinity).
 #define TRACE_FAR 1e6
 
-// Moves a ray origin off the surface it leaves along the geometric normal on the side the ray
-// goes: a few float ulps scaled with the coordinates' magnitude (Wächter and Binder, Ray
-// Tracing Gems ch. 6), so it works for scenes of any size without a scene-dependent epsilon.
-vec3 offset_ray(vec3 p, vec3 n) {
-    const float origin = 1.0 / 32.0;
-    const float float_scale = 1.0 / 65536.0;
-    const float int_scale = 256.0;
-    ivec3 of_i = ivec3(int_scale * n);
-    vec3 p_i = intBitsToFloat(floatBitsToInt(p) + ivec3(p.x < 0.0 ? -of_i.x : of_i.x,
-                                                           p.y < 0.0 ? -of_i.y : of_i.y,
-                                                           p.z < 0.0 ? -of_i.z : of_i.z));
-    return vec3(abs(p.x) < origin ? p.x + float_scale * n.x : p_i.x,
-                abs(p.y) < origin ? p.y + float_scale * n.y : p_i.y,
-                abs(p.z) < origin ? p.z + float_scale * n.z : p_i.z);
-}
-
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
-
-// Shadow-ray length toward a light sample: stops just short of an emitter so that its own
-// triangle does not occlude it.
-float shadow_tmax(float dist) { return dist >= LIGHT_FAR ? TRACE_FAR : dist * (1.0 - 1e-4); }
 
 vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
     vec3 origin = frame.camera_pos;
@@ -96,7 +77,7 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
             vec3 f = brdf_eval_cos(m, n, v, ls.dir);
             if (dot(f, f) > 0.0) {
                 ++rays;
-                if (!trace_any(leave, ls.dir, 0.0, shadow_tmax(ls.dist), RAY_MASK_ALL)) {
+                if (!trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
                     float w = ls.pdf > 0.0 ? mis_power(ls.pdf, brdf_pdf(m, n, v, ls.dir)) : 1.0;
                     radiance += throughput * f * ls.weight * w;
                 }

@@ -1,39 +1,159 @@
 #version 460
-// shadows: visibility of the first four punctual lights from every G-buffer surface, one
-// shadow ray per light (hard shadows), through the trace interface.
+// shadows: visibility of the first four punctual lights from every G-buffer surface, through
+// the trace interface (Ray Tracing Gems ch. 13, adaptive sampling).
+// - Hard lights (radius 0): one shadow ray every frame, stored as is.
+// - Area lights (sphere or disk): a per-pixel sample count 1..s_max carried from frame to
+//   frame (+1 while the filtered penumbra measure of last frame is above delta and the count
+//   below s_max; -1 once it is below delta and the count has not changed for 4 frames),
+//   s_max wherever reprojection fails (then all four cached frames are overwritten). A pixel
+//   outside any penumbra is sampled only when its 8x8 block's turn comes (every 4th frame)
+//   and otherwise reuses its reprojected visibility. The global budget lowers s_max when the
+//   image's summed penumbra measure exceeds it. Sample points come from an R2 sequence indexed
+//   by (frame mod 4, the pixel's place in its 3x3 block, sample), like the chapter's Poisson
+//   sets.
+// - Lights out of range at a pixel (range window 0) are culled: visibility 0, no rays.
+// Writes the 4-frame visibility ring (ring0 = this frame), sample counts and stability counters.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/gbuffer.glsl"
-#include "common/lights.glsl"
+#include "common/light_sampling.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
+layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;
 layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 2, rg32ui) uniform readonly uimage2D g_ids;
-// Channel i: visibility (0 or 1) of light i; 1 for lights that do not exist.
-layout(set = 1, binding = 3, rgba16f) uniform writeonly image2D out_visibility;
+layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_motion;
+layout(set = 1, binding = 4, rg32f) uniform readonly image2D prev_depth;
+layout(set = 1, binding = 5, rgba16f) uniform readonly image2D prev_ring0;
+layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_ring1;
+layout(set = 1, binding = 7, rgba16f) uniform readonly image2D prev_ring2;
+layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_count;
+layout(set = 1, binding = 9, rgba16f) uniform readonly image2D prev_stable;
+layout(set = 1, binding = 10, rgba16f) uniform readonly image2D prev_dv;      // last frame's filtered variation
+layout(set = 1, binding = 11, r32ui) uniform readonly uimage2D prev_budget;   // last frame's summed variation x 64
+layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_ring0;
+layout(set = 1, binding = 13, rgba16f) uniform writeonly image2D out_ring1;
+layout(set = 1, binding = 14, rgba16f) uniform writeonly image2D out_ring2;
+layout(set = 1, binding = 15, rgba16f) uniform writeonly image2D out_ring3;
+layout(set = 1, binding = 16, rgba16f) uniform writeonly image2D out_count;   // sample count per light (0: culled)
+layout(set = 1, binding = 17, rgba16f) uniform writeonly image2D out_stable;  // frames the count has not changed
+
+#include "common/shadows_common.glsl"
+
+// The chapter's 4x4 rotation of forced 8x8 blocks: block (bx, by) is sampled when this equals
+// frame mod 4.
+const uint FORCED[16] = uint[16](0u, 3u, 2u, 1u, 2u, 1u, 0u, 3u, 0u, 3u, 2u, 1u, 1u, 2u, 0u, 3u);
+
+// Low-discrepancy point n of the R2 sequence (Roberts 2018).
+vec2 r2(uint n) { return fract(vec2(0.5) + float(n) * vec2(0.7548776662, 0.5698402910)); }
+
+// Fraction of `count` shadow rays toward points of light i that reach it.
+float trace_visibility(uint i, vec3 p, vec3 origin, ivec2 px, uint count) {
+    uint set = ((frame.frame_index & 3u) * 9u + uint(px.y % 3) * 3u + uint(px.x % 3)) * count;
+    float visible = 0.0;
+    for (uint k = 0u; k < count; ++k) {
+        NeeSample s = sample_punctual_light(i, p, r2(set + k), 1.0);
+        if (dot(s.weight, s.weight) == 0.0) continue;
+        float tmax = s.dist >= LIGHT_FAR ? 1e30 : s.dist * (1.0 - 1e-4);
+        if (!trace_any(origin, s.dir, 0.0, tmax, RAY_MASK_ALL)) visible += 1.0;
+    }
+    return visible / float(count);
+}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    if (imageLoad(g_ids, px).x == NO_INSTANCE) {
+        vec4 one = vec4(1.0);
+        imageStore(out_ring0, px, one);
+        imageStore(out_ring1, px, one);
+        imageStore(out_ring2, px, one);
+        imageStore(out_ring3, px, one);
+        imageStore(out_count, px, vec4(0.0));
+        imageStore(out_stable, px, vec4(0.0));
+        return;
+    }
+    float depth = imageLoad(g_depth, px).r;
+    vec3 ng = imageLoad(g_normal_geo, px).xyz;
+    vec3 p = world_position(px, depth);
+    vec3 origin = offset_ray_origin(p, ng, depth);
+
+    // Reprojection (Eq. 13.7), to the nearest previous pixel.
+    vec2 prev_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
+    ivec2 q = ivec2(floor(prev_pos));
+    bool reprojected = (frame.flags & FRAME_RESET_HISTORY) == 0u &&
+                       all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size))) &&
+                       depth_consistent(depth, imageLoad(prev_depth, q).r, ng);
+    vec4 r0 = reprojected ? imageLoad(prev_ring0, q) : vec4(0.0);
+    vec4 r1 = reprojected ? imageLoad(prev_ring1, q) : vec4(0.0);
+    vec4 r2v = reprojected ? imageLoad(prev_ring2, q) : vec4(0.0);
+    vec4 count = reprojected ? imageLoad(prev_count, q) : vec4(0.0);
+    vec4 stable = reprojected ? imageLoad(prev_stable, q) : vec4(0.0);
+    vec4 dv = reprojected ? imageLoad(prev_dv, q) : vec4(1.0);
+
+    // The global budget: lower s_max in proportion when last frame's penumbrae were too wide.
+    float summed = float(imageLoad(prev_budget, ivec2(0)).x) / 64.0;
+    uint s_max = summed > sp.budget ? max(1u, uint(float(sp.s_max) * sp.budget / summed)) : sp.s_max;
+    ivec2 block = px / 8;
+    bool forced = sp.forced_blocks != 0u && FORCED[(block.y & 3) * 4 + (block.x & 3)] == (frame.frame_index & 3u);
+
     vec4 vis = vec4(1.0);
-    if (imageLoad(g_ids, px).x != NO_INSTANCE) {
-        float depth = imageLoad(g_depth, px).r;
-        vec3 ng = imageLoad(g_normal_geo, px).xyz;
-        vec3 p = world_position(px, depth);
-        vec3 origin = offset_ray_origin(p, ng, depth);
-        uint n = min(frame.light_count, 4u);
-        for (uint i = 0u; i < n; ++i) {
-            LightSample ls = sample_punctual(lights[i], p);
-            // Surfaces facing away from the light are dark anyway: no ray needed.
-            if (dot(ls.dir, ng) <= 0.0 || dot(ls.radiance, ls.radiance) == 0.0) {
-                vis[i] = 0.0;
-                continue;
-            }
-            float tmax = ls.dist >= 1e29 ? 1e6 : ls.dist * (1.0 - 1e-4);
-            vis[i] = trace_any(origin, ls.dir, 0.0, tmax, RAY_MASK_ALL) ? 0.0 : 1.0;
+    vec4 state = vec4(0.0);
+    bvec4 soft = soft_lights();
+    for (uint i = 0u; i < min(frame.light_count, 4u); ++i) {
+        LightSample ls = sample_punctual(lights[i], p);
+        if (dot(ls.radiance, ls.radiance) == 0.0) {
+            // Culled by range (or outside a spot's cone): dark, no rays, nothing to filter.
+            vis[i] = 0.0;
+            continue;
+        }
+        if (!soft[i]) {
+            vis[i] = trace_visibility(i, p, origin, px, 1u);
+            state[i] = 1.0;
+            continue;
+        }
+        // Sample count with hysteresis.
+        float s = count[i];
+        if (!reprojected) {
+            s = float(s_max);
+            stable[i] = 0.0;
+        } else if (dv[i] > sp.delta && s < float(s_max)) {
+            s += 1.0;
+            stable[i] = 0.0;
+        } else if (dv[i] < sp.delta && stable[i] >= 4.0 && s > 1.0) {
+            s -= 1.0;
+            stable[i] = 0.0;
+        } else {
+            stable[i] += 1.0;
+        }
+        s = clamp(s, 1.0, float(s_max));
+        state[i] = s;
+        bool sample_now = !reprojected || dv[i] > sp.delta || forced;
+        if (sample_now) {
+            vis[i] = trace_visibility(i, p, origin, px, uint(s));
+        } else {
+            vis[i] = r0[i];
+        }
+        if (!reprojected) {
+            // Nothing cached is valid: every slot of the ring takes the new estimate.
+            r0[i] = vis[i];
+            r1[i] = vis[i];
+            r2v[i] = vis[i];
         }
     }
-    imageStore(out_visibility, px, vis);
+    // Hard lights keep no history: their ring holds this frame everywhere.
+    for (uint i = 0u; i < 4u; ++i) {
+        if (!soft[i]) {
+            r0[i] = vis[i];
+            r1[i] = vis[i];
+            r2v[i] = vis[i];
+        }
+    }
+    imageStore(out_ring0, px, vis);
+    imageStore(out_ring1, px, r0);
+    imageStore(out_ring2, px, r1);
+    imageStore(out_ring3, px, r2v);
+    imageStore(out_count, px, state);
+    imageStore(out_stable, px, stable);
 }

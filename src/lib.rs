@@ -10,6 +10,7 @@ pub mod cli;
 pub mod gpu;
 pub mod graph;
 pub mod image_io;
+pub mod metrics;
 pub mod passes;
 pub mod render;
 pub mod scene;

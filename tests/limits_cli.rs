@@ -55,9 +55,9 @@ fn each_limit_flag_stops_the_load_with_a_clear_error() {
     let dir = temp_dir();
     let cornell = default_scene();
     let data_uri = data_uri_scene(&dir);
-    // (flag, value too small for the scene, the limit and value the message must give). The
-    // default scene has 17 nodes two deep, 2880-index meshes, 16x16-or-larger textures and
-    // one animation; the data-URI scene's URI is 48 characters.
+    // (flag, a value too small for the scene, the limit and value the message must give). The
+    // default scene has 17 nodes two deep, meshes of 6 to 2880 indices, two textures and one
+    // animation.
     let cases: [(&str, &str, &Path, &str); 11] = [
         ("--max-triangles", "1", &cornell, "3 * max_triangles + 2 = 5"),
         ("--max-vertices", "3", &cornell, "max_vertices = 3"),

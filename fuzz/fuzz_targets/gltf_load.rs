@@ -4,7 +4,7 @@
 #![no_main]
 
 // Only the loader is exercised; the rest of the scene module is unused here.
-#[allow(dead_code)]
+#[allow(dead_code, unused_imports)]
 #[path = "../../src/scene/mod.rs"]
 mod scene;
 

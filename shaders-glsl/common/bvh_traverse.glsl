@@ -11,38 +11,17 @@
 #ifndef BVH_TRAVERSE_GLSL
 #define BVH_TRAVERSE_GLSL
 
-// Records as in src/accel/bvh/layout.rs: integers ride in the w of a vec4 as float bits.
-struct BvhNode {
-    vec4 a_min;  // w: child A reference
-    vec4 a_max;  // w: child B reference
-    vec4 b_min;
-    vec4 b_max;
-};
+// The packed rows of src/accel/bvh (its mod.rs documents the layout): row 0 holds the top
+// level's root reference and the first row of the bottom levels; references are
+// kind << 28 | row offset within their tree (kind 0: inner node, n: leaf of n records).
+layout(set = 0, binding = 8, std430) readonly restrict buffer BvhRows { uvec4 bvh_rows[]; };
 
-struct BvhInstance {
-    vec4 world_to_object[3];
-    vec4 object_to_world[3];
-    uint root_node;
-    uint first_triangle;
-    uint custom_index;
-    uint mask;
-    uint flags;
-    uint mesh;
-    uint material;
-    uint pad;
-};
-
-// Binding 8: the top level's nodes (from index 0) followed by every mesh's nodes (instances'
-// root_node indexes this buffer), so both levels fetch nodes the same way.
-layout(set = 0, binding = 8, std430) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
-layout(set = 0, binding = 9, std430) readonly buffer TlasInstances { BvhInstance tlas_instances[]; };
-layout(set = 0, binding = 10, std430) readonly buffer BlasTriangles { vec4 blas_triangles[]; };  // 3 per triangle
-
-#define BVH_LEAF_BIT 0x80000000u
-#define BVH_COUNT_SHIFT 27u
-#define BVH_FIRST_MASK 0x07ffffffu
-#define BVH_COUNT_MASK 0xfu
+#define BVH_KIND_SHIFT 28u
+#define BVH_OFFSET_MASK 0x0fffffffu
 #define BVH_NONE 0xffffffffu
+#define BVH_NODE_ROWS 2u
+#define BVH_TRIANGLE_ROWS 3u
+#define BVH_INSTANCE_ROWS 4u
 #define BVH_INSTANCE_ALPHA_TESTED 1u
 // Each level's tree is at most STACK_SIZE deep (src/accel/bvh/layout.rs); one stack holds both.
 #define BVH_STACK_SIZE 128
@@ -136,31 +115,35 @@ Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool fir
     BvhRay r = world;
     Hit best;
     best.instance = NO_HIT;
+    // Row of the best hit's instance record: its custom index is read once, at the end.
+    uint best_instance = BVH_NONE;
     float closest = tmax;
     int sp = 0;
+    uvec2 head = bvh_rows[0].xy;
+    uint cur = head.x;
+    uint blas_base = head.y;
+    // The current tree's first row: 0 in the top level.
+    uint base = 0u;
     // While inside an instance: the stack depth at its entry (entries below belong to the top
-    // level), its mesh's nodes and triangles, and what a hit reports. -1 in the top level.
+    // level) and its record's row. -1 in the top level.
     int inst_sp = -1;
-    uint node_base = 0u;
-    uint tri_base = 0u;
-    uint inst_custom = 0u;
+    uint inst_row = 0u;
     bool inst_alpha = false;
-    // The leaf being tested: triangles tri_next..tri_end (relative to tri_base).
+    // The leaf being tested: triangle records at rows tri_next..tri_end.
     uint tri_next = 0u;
     uint tri_end = 0u;
-    uint cur = 0u;
     while (true) {
         if (tri_next < tri_end) {
-            uint at = 3u * (tri_base + tri_next);
             vec2 bary;
             bool front;
-            float t = bvh_hit_triangle(r, blas_triangles[at].xyz, blas_triangles[at + 1u].xyz,
-                                       blas_triangles[at + 2u].xyz, tmin, closest, bary, front);
+            float t = bvh_hit_triangle(r, uintBitsToFloat(bvh_rows[tri_next].xyz),
+                                       uintBitsToFloat(bvh_rows[tri_next + 1u].xyz),
+                                       uintBitsToFloat(bvh_rows[tri_next + 2u].xyz), tmin, closest, bary, front);
             if (t >= 0.0) {
-                uint prim = floatBitsToUint(blas_triangles[at].w);
-                if (!inst_alpha || hit_alpha_accept(inst_custom, prim, bary)) {
+                uint prim = bvh_rows[tri_next].w;
+                if (!inst_alpha || hit_alpha_accept(bvh_rows[inst_row + 3u].z, prim, bary)) {
                     closest = t;
-                    best.instance = inst_custom;
+                    best_instance = inst_row;
                     best.primitive = prim;
                     best.t = t;
                     best.bary = bary;
@@ -168,7 +151,7 @@ Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool fir
                     if (first_hit) break;
                 }
             }
-            ++tri_next;
+            tri_next += BVH_TRIANGLE_ROWS;
         }
         if (tri_next < tri_end) continue;
         if (cur == BVH_NONE) {
@@ -177,20 +160,31 @@ Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool fir
             while (sp > 0 && bvh_stack_t[sp - 1] > closest) --sp;
             if (sp <= inst_sp) {
                 r = world;
-                node_base = 0u;
+                base = 0u;
                 inst_sp = -1;
             }
             if (sp == 0) break;
             --sp;
             cur = bvh_stack_ref[sp];
         }
-        if ((cur & BVH_LEAF_BIT) == 0u) {
-            // Inner node: enter the nearer child hit, push the farther.
-            BvhNode node = bvh_nodes[node_base + cur];
-            float ta = bvh_hit_box(r, node.a_min.xyz, node.a_max.xyz, tmin, closest);
-            float tb = bvh_hit_box(r, node.b_min.xyz, node.b_max.xyz, tmin, closest);
-            uint a = floatBitsToUint(node.a_min.w);
-            uint b = floatBitsToUint(node.a_max.w);
+        if (cur < (1u << BVH_KIND_SHIFT)) {
+            // Inner node: decode both quantised child boxes, enter the nearer child hit, push
+            // the farther.
+            uint at = base + cur;
+            uvec4 n0 = bvh_rows[at];
+            uvec4 n1 = bvh_rows[at + 1u];
+            vec3 grid_origin = uintBitsToFloat(n0.xyz);
+            vec3 grid_step = uintBitsToFloat(((uvec3(n0.w) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
+            vec3 a_lo = grid_origin + vec3(n1.xyz & 0xffu) * grid_step;
+            vec3 b_lo = grid_origin + vec3((n1.xyz >> 8u) & 0xffu) * grid_step;
+            vec3 a_hi = grid_origin + vec3((n1.xyz >> 16u) & 0xffu) * grid_step;
+            vec3 b_hi = grid_origin + vec3(n1.xyz >> 24u) * grid_step;
+            float ta = bvh_hit_box(r, a_lo, a_hi, tmin, closest);
+            float tb = bvh_hit_box(r, b_lo, b_hi, tmin, closest);
+            uint kind_a = (n0.w >> 24u) & 0xfu;
+            uint leaf_rows = inst_sp >= 0 ? BVH_TRIANGLE_ROWS : BVH_INSTANCE_ROWS;
+            uint a = (kind_a << BVH_KIND_SHIFT) | n1.w;
+            uint b = ((n0.w >> 28u) << BVH_KIND_SHIFT) | (n1.w + (kind_a == 0u ? BVH_NODE_ROWS : kind_a * leaf_rows));
             cur = ta >= 0.0 ? a : (tb >= 0.0 ? b : BVH_NONE);
             if (ta >= 0.0 && tb >= 0.0) {
                 bool b_first = tb < ta;
@@ -200,29 +194,31 @@ Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool fir
                 cur = b_first ? b : a;
             }
         }
-        if (cur != BVH_NONE && (cur & BVH_LEAF_BIT) != 0u) {
-            uint first = cur & BVH_FIRST_MASK;
-            uint count = ((cur >> BVH_COUNT_SHIFT) & BVH_COUNT_MASK) + 1u;
+        if (cur != BVH_NONE && cur >= (1u << BVH_KIND_SHIFT)) {
+            uint at = base + (cur & BVH_OFFSET_MASK);
+            uint kind = cur >> BVH_KIND_SHIFT;
             cur = BVH_NONE;
             if (inst_sp >= 0) {
-                tri_next = first;
-                tri_end = first + count;
+                tri_next = at;
+                tri_end = at + kind * BVH_TRIANGLE_ROWS;
             } else {
-                // A top-level leaf is one instance: continue in its mesh, in object space.
-                BvhInstance inst = tlas_instances[first];
-                if ((inst.mask & mask) != 0u) {
-                    r = bvh_ray(bvh_xform_point(inst.world_to_object, origin),
-                                bvh_xform_vector(inst.world_to_object, dir));
+                // A top-level leaf is one instance record: continue at its mesh's root, in
+                // object space.
+                uvec4 meta = bvh_rows[at + 3u];
+                if ((meta.w & mask & 0xffu) != 0u) {
+                    vec4 m[3] = vec4[3](uintBitsToFloat(bvh_rows[at]), uintBitsToFloat(bvh_rows[at + 1u]),
+                                        uintBitsToFloat(bvh_rows[at + 2u]));
+                    r = bvh_ray(bvh_xform_point(m, origin), bvh_xform_vector(m, dir));
                     inst_sp = sp;
-                    node_base = inst.root_node;
-                    tri_base = inst.first_triangle;
-                    inst_custom = inst.custom_index;
-                    inst_alpha = (inst.flags & BVH_INSTANCE_ALPHA_TESTED) != 0u;
-                    cur = 0u;
+                    inst_row = at;
+                    inst_alpha = ((meta.w >> 8u) & BVH_INSTANCE_ALPHA_TESTED) != 0u;
+                    base = blas_base + meta.x;
+                    cur = meta.y;
                 }
             }
         }
     }
+    if (best_instance != BVH_NONE) best.instance = bvh_rows[best_instance + 3u].z;
     return best;
 }
 

@@ -87,7 +87,12 @@ pub struct LimitArgs {
     #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_nodes)]
     pub max_nodes: u32,
     /// Longest `data:` URI, in MiB of encoded text.
-    #[arg(long, help_heading = LIMITS, value_name = "MIB", default_value_t = Limits::default().max_data_uri_bytes >> 20)]
+    #[arg(
+        long,
+        help_heading = LIMITS,
+        value_name = "MIB",
+        default_value_t = Limits::default().max_data_uri_bytes >> 20
+    )]
     pub max_data_uri_mib: u64,
     /// Most mesh instances (one per primitive of each node drawing a mesh).
     #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_instances)]

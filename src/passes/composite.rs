@@ -1,5 +1,6 @@
-//! composite: direct light from the punctual lights plus emission, in linear HDR
-//! (shaders-glsl/composite.comp).
+//! composite: the frame in linear HDR (shaders-glsl/composite.comp): emission, punctual lights
+//! with their ray-traced visibility, the diffuse signal remodulated by the albedo, and the
+//! specular signal.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Read};
@@ -10,7 +11,9 @@ use anyhow::Result;
 pub const NAME: &str = "composite";
 pub const COLOR: &str = "composite.color";
 
-pub fn new(b: &PassBuilder) -> Result<FullscreenPass> {
+/// `diffuse`: demodulated diffuse light (gi, denoised or not); `specular`: the specular lobe's
+/// ray-traced light (reflections, denoised or not).
+pub fn new(b: &PassBuilder, diffuse: &str, specular: &str) -> Result<FullscreenPass> {
     let inputs = [
         "gbuffer.depth",
         "gbuffer.normal",
@@ -19,6 +22,8 @@ pub fn new(b: &PassBuilder) -> Result<FullscreenPass> {
         "gbuffer.emissive",
         "gbuffer.ids",
         super::shadows::VISIBILITY,
+        diffuse,
+        specular,
     ]
     .map(|n| (n.to_string(), Read::Texel))
     .to_vec();

@@ -2,7 +2,7 @@
 //! writing named images, bound as set 1 in declaration order (inputs first, then outputs).
 
 use super::PassBuilder;
-use crate::gpu::{Binding, BindingKind, DescriptorSetLayout, Pipeline, PushResource, Sampler, SamplerDesc};
+use crate::gpu::{Binding, BindingKind, DescriptorSetLayout, Pipeline, PushResource, Sampler, SamplerDesc, vk};
 use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind};
 use anyhow::Result;
 
@@ -24,6 +24,8 @@ pub struct FullscreenPass {
     outputs: Vec<OutputDesc>,
     /// Push constants, rewritten by the owner before a frame when they change.
     pub push_constants: Vec<u8>,
+    /// Outputs zeroed before the dispatch (sums the shader accumulates with atomics).
+    clears: Vec<String>,
 }
 
 /// Workgroup size of every full-screen compute shader (`local_size_x/y`).
@@ -51,7 +53,23 @@ impl FullscreenPass {
         let pipeline =
             Pipeline::compute(b.ctx, name, &spirv, &[&b.scene.set_layout, &set_layout], push_constants.len() as u32)?;
         let sampler = Sampler::new(b.ctx, SamplerDesc::LINEAR_CLAMP)?;
-        Ok(Self { name: name.to_string(), pipeline, _set_layout: set_layout, sampler, inputs, outputs, push_constants })
+        Ok(Self {
+            name: name.to_string(),
+            pipeline,
+            _set_layout: set_layout,
+            sampler,
+            inputs,
+            outputs,
+            push_constants,
+            clears: Vec::new(),
+        })
+    }
+}
+
+impl FullscreenPass {
+    /// Zero `output` (one of this pass's outputs) before every dispatch.
+    pub fn clear_before_dispatch(&mut self, output: &str) {
+        self.clears.push(output.to_string());
     }
 }
 
@@ -67,6 +85,24 @@ impl Pass for FullscreenPass {
 
     fn record(&mut self, ctx: &PassContext) -> Result<()> {
         let rec = ctx.rec;
+        if !self.clears.is_empty() {
+            // The graph's barrier covered compute access; the clear is a transfer, so it gets
+            // barriers of its own on both sides.
+            rec.memory_barrier(
+                (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE),
+                (vk::PipelineStageFlags2::CLEAR, vk::AccessFlags2::TRANSFER_WRITE),
+            );
+            for c in &self.clears {
+                rec.clear_image(ctx.images.get(c));
+            }
+            rec.memory_barrier(
+                (vk::PipelineStageFlags2::CLEAR, vk::AccessFlags2::TRANSFER_WRITE),
+                (
+                    vk::PipelineStageFlags2::COMPUTE_SHADER,
+                    vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                ),
+            );
+        }
         let mut resources: Vec<PushResource> = self
             .inputs
             .iter()

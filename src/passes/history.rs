@@ -14,11 +14,18 @@ pub struct Kept {
     pub source: String,
     pub format: vk::Format,
     pub preview: Preview,
+    /// Size when the source is not frame-sized.
+    pub extent: Option<vk::Extent2D>,
 }
 
 impl Kept {
     pub fn new(source: &str, format: vk::Format, preview: Preview) -> Self {
-        Self { source: source.to_string(), format, preview }
+        Self { source: source.to_string(), format, preview, extent: None }
+    }
+
+    pub fn with_extent(mut self, width: u32, height: u32) -> Self {
+        self.extent = Some(vk::Extent2D { width, height });
+        self
     }
 }
 
@@ -58,7 +65,7 @@ impl Pass for HistoryPass {
                     format: k.format,
                     usage: Usage::Transfer,
                     preview: k.preview,
-                    extent: None,
+                    extent: k.extent,
                 })
                 .collect(),
         }

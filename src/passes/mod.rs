@@ -5,10 +5,12 @@
 pub mod composite;
 pub mod fullscreen;
 pub mod gbuffer;
+pub mod gi;
 pub mod history;
 pub mod inject;
 pub mod pathtrace;
 pub mod primary_rays;
+pub mod reflections;
 pub mod shadows;
 pub mod svgf;
 pub mod taa;

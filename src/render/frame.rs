@@ -1,7 +1,8 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by name.
 //!
-//! gbuffer -> [primary_rays] -> shadows -> [denoised signals] -> composite -> [taa] -> tonemap
-//! -> history. `history` comes last: it keeps what the next frame's temporal passes reproject.
+//! gbuffer -> [primary_rays] -> shadows chain -> gi -> reflections -> [svgf chains: diffuse on
+//! gi, specular on reflections] -> composite -> [taa] -> tonemap -> history.
+//! `history` comes last: it keeps what the next frame's temporal passes reproject.
 
 use super::Settings;
 use crate::graph::Pass;
@@ -27,9 +28,22 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
     if settings.primary_rays {
         passes.push(Box::new(passes::primary_rays::new(b)?));
     }
-    passes.push(Box::new(passes::shadows::new(b)?));
+    let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
+    let (shadow_passes, shadow_kept) = passes::shadows::chain(b, &settings.shadows, extent)?;
+    passes.extend(shadow_passes);
+    kept.extend(shadow_kept);
+    passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed)?));
+    passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed)?));
+    let (mut diffuse, mut specular) = (passes::gi::RADIANCE.to_string(), passes::reflections::RADIANCE.to_string());
+    if settings.denoiser {
+        for (signal, input) in [("diffuse", &mut diffuse), ("specular", &mut specular)] {
+            let chain = svgf::chain(b, signal, input, &settings.denoise)?;
+            passes.extend(chain.passes);
+            kept.extend(chain.kept);
+            *input = chain.output;
+        }
+    }
     if settings.test_signal {
-        let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
         let (pass, texels) = inject::new(b.ctx, TEST_SIGNAL, extent)?;
         let name = format!("{}.{TEST_SIGNAL}", inject::NAME);
         passes.push(Box::new(pass));
@@ -38,7 +52,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
         kept.extend(chain.kept);
         injected.insert(name, texels);
     }
-    passes.push(Box::new(passes::composite::new(b)?));
+    passes.push(Box::new(passes::composite::new(b, &diffuse, &specular)?));
     let mut hdr_output = passes::composite::COLOR.to_string();
     if settings.taa {
         passes.push(Box::new(passes::taa::new(b, &hdr_output)?));

@@ -334,6 +334,15 @@ mod tests {
         assert_eq!(e[0].flags, EMITTER_DOUBLE_SIDED);
     }
 
+    /// The structs match light_sampling.glsl's scalar layout: 4-byte members, vec3 unpadded.
+    #[test]
+    fn gpu_structs_match_the_shader_layout() {
+        assert_eq!(size_of::<GpuLightTableHeader>(), 5 * 4 + 12);
+        assert_eq!(size_of::<GpuLightEntry>(), 16);
+        assert_eq!(size_of::<GpuEmitter>(), 4 * (12 + 4));
+        assert_eq!(std::mem::offset_of!(GpuEmitter, normal), 48);
+    }
+
     #[test]
     fn cdf_is_normalised_and_never_picks_powerless_lights() {
         let entries = light_cdf(&[(0, 0, 1.0), (1, 0, 0.0), (1, 1, 3.0), (2, 0, 0.0)]);

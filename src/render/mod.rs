@@ -40,8 +40,16 @@ pub struct Settings {
     pub primary_rays: bool,
     /// Temporal anti-aliasing (jittered G-buffer) before tonemapping.
     pub taa: bool,
+    /// Denoise the diffuse and specular signals with SVGF.
+    pub denoiser: bool,
     /// The denoiser's settings.
     pub denoise: crate::passes::svgf::SvgfSettings,
+    pub gi: crate::passes::gi::GiSettings,
+    pub reflections: crate::passes::reflections::ReflectionSettings,
+    /// Mixed into the random streams of the stochastic passes.
+    pub seed: u32,
+    /// The adaptive shadows' settings.
+    pub shadows: crate::passes::shadows::ShadowSettings,
     /// Tests: a CPU-provided image `inject.signal` goes through an SVGF chain of its own.
     pub test_signal: bool,
     pub mode: RenderMode,
@@ -74,7 +82,12 @@ impl Default for Settings {
             start_time: 0.0,
             primary_rays: false,
             taa: false,
+            denoiser: true,
             denoise: Default::default(),
+            gi: Default::default(),
+            reflections: Default::default(),
+            seed: 0,
+            shadows: Default::default(),
             test_signal: false,
             mode: RenderMode::Hybrid,
         }

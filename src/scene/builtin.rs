@@ -7,13 +7,14 @@ use anyhow::{Result, bail};
 use glam::{Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:`.
-pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test"];
+pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test"];
 
 pub fn by_name(name: &str) -> Result<Scene> {
     match name {
         "gbuffer-test" => Ok(gbuffer_test()),
         "alpha-shadow" => Ok(alpha_shadow()),
         "shadow-test" => Ok(shadow_test()),
+        "soft-shadow-test" => Ok(soft_shadow_test()),
         _ => bail!("builtin:{name}: no such built-in scene (known: {})", NAMES.join(", ")),
     }
 }
@@ -202,9 +203,13 @@ pub mod shadow_test_facts {
     /// Whether floor point `p` (y = 0) is in the box's shadow: the ray toward the light hits
     /// the box.
     pub fn shadowed(p: Vec3) -> bool {
-        let (o, d) = (p, -light_dir());
+        ray_hits_box(p, -light_dir(), f32::INFINITY)
+    }
+
+    /// Whether the ray `o + t d`, 0 <= t <= tmax, meets the box.
+    pub fn ray_hits_box(o: Vec3, d: Vec3, tmax: f32) -> bool {
         let (lo, hi) = (Vec3::new(-HALF, 0.0, -HALF), Vec3::new(HALF, 2.0 * HALF, HALF));
-        let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+        let (mut t0, mut t1) = (0.0f32, tmax);
         for a in 0..3 {
             let (n, f) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
             t0 = t0.max(n.min(f));
@@ -212,6 +217,10 @@ pub mod shadow_test_facts {
         }
         t0 <= t1
     }
+
+    /// The sphere light of `soft_shadow_test`: centre and radius.
+    pub const SPHERE_LIGHT: Vec3 = Vec3::new(-1.5, 3.0, -1.5);
+    pub const SPHERE_RADIUS: f32 = 0.4;
 }
 
 /// A box on a large floor under a low sun, seen from a camera just above the floor: the
@@ -257,6 +266,26 @@ pub fn shadow_test() -> Scene {
         radius: 0.0,
         node: 3,
     });
+    s
+}
+
+/// `shadow_test` lit by a sphere light instead of the sun: the box casts a soft shadow whose
+/// true visibility `shadow_test_facts::ray_hits_box` can integrate.
+pub fn soft_shadow_test() -> Scene {
+    use shadow_test_facts::*;
+    let mut s = shadow_test();
+    s.name = "builtin:soft-shadow-test".into();
+    let lamp = s.nodes.len() as u32;
+    s.nodes.push(node("lamp", SPHERE_LIGHT));
+    s.lights[0] = super::Light {
+        name: "lamp".into(),
+        kind: super::LightKind::Point,
+        color: Vec3::ONE,
+        intensity: 30.0,
+        range: None,
+        radius: SPHERE_RADIUS,
+        node: lamp,
+    };
     s
 }
 

@@ -7,11 +7,12 @@
 //! at most `max_leaf_size` primitives. Subtrees above [`PARALLEL_MIN`] primitives are built on
 //! separate threads (`std::thread::scope`), each into its own node vector that is appended
 //! afterwards in the same depth-first order a serial build would produce: the output does not
-//! depend on the thread count.
+//! depend on the thread count. The binary tree is then packed into rows ([`pack`]): records
+//! depth first, each node's two children adjacent, boxes quantised.
 
 use super::layout::{
-    BlasPool, BvhInstance, BvhNode, BvhTriangle, ChildRef, InstanceDesc, MAX_LEAF_SIZE, MAX_PRIMITIVES, MeshBvh,
-    STACK_SIZE, Tlas,
+    BlasPool, BvhInstance, ChildRef, INSTANCE_ROWS, InstanceDesc, MAX_LEAF_SIZE, MAX_ROWS, MeshBvh, NODE_ROWS,
+    NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas, child_rows, triangle_rows,
 };
 use glam::{UVec3, Vec3, Vec3A, Vec4};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -22,11 +23,15 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// primitives than bins use one bin per primitive.
 pub const BINS: usize = 16;
 
+/// Most primitives one tree can hold: every triangle record must be addressable by a 28-bit
+/// row offset.
+const MAX_PRIMITIVES: u32 = MAX_ROWS / TRIANGLE_ROWS;
+
 /// Nodes deeper than this use median splits, which halve the primitive count, so even a
 /// degenerate input whose SAH splits peel off one primitive at a time yields a tree at most
-/// `SAH_DEPTH + 27` inner levels deep (27 = log2 of [`MAX_PRIMITIVES`]), within
+/// `SAH_DEPTH + 27` inner levels deep (27 = log2 of [`MAX_PRIMITIVES`], rounded up), within
 /// [`STACK_SIZE`].
-const SAH_DEPTH: u32 = (STACK_SIZE as u32) - MAX_PRIMITIVES.trailing_zeros() - 1;
+const SAH_DEPTH: u32 = (STACK_SIZE as u32) - (32 - MAX_PRIMITIVES.leading_zeros()) - 1;
 
 /// Subtrees with fewer primitives are built on the current thread: below this, spawning
 /// costs more than it saves.
@@ -35,7 +40,7 @@ const PARALLEL_MIN: usize = 16 * 1024;
 /// Builder settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildOptions {
-    /// Most primitives per leaf, 1..=16 (the leaf encoding's limit).
+    /// Most primitives per leaf, 1..=[`MAX_LEAF_SIZE`] (the leaf encoding's limit).
     pub max_leaf_size: u32,
     /// SAH cost of entering a node (its two box tests), relative to one primitive test.
     pub traversal_cost: f32,
@@ -51,7 +56,8 @@ impl BuildOptions {
     /// The cap of 8 bounds the leaf loop's length (warp divergence on the GPU).
     pub const MESH: Self = Self { max_leaf_size: 8, traversal_cost: 1.5, threads: 0 };
     /// Top level (instances): entering an instance costs a ray transform plus a root fetch,
-    /// far more than a box test, so every instance gets its own leaf box.
+    /// far more than a box test, so every instance gets its own leaf box (and the layout
+    /// needs it: a top-level leaf is one instance record).
     pub const INSTANCES: Self = Self { max_leaf_size: 1, traversal_cost: 1.0, threads: 1 };
 }
 
@@ -150,19 +156,45 @@ impl Extent {
     }
 }
 
-/// A built tree: nodes (root at 0, tree-relative references) and the primitive indices in
-/// leaf order (leaf ranges index this list).
+/// A child in the binary tree the builder makes before packing: an inner node (index into
+/// [`Tree::nodes`]) or a leaf's range of [`Tree::order`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Child {
+    Inner(u32),
+    Leaf { first: u32, count: u32 },
+}
+
+impl Child {
+    /// The kind a [`ChildRef`] to it has.
+    fn kind(self) -> u32 {
+        match self {
+            Child::Inner(_) => 0,
+            Child::Leaf { count, .. } => count,
+        }
+    }
+}
+
+/// An inner node of the built tree: both children and their boxes.
+#[derive(Clone, Copy, Debug)]
+struct BuildNode {
+    children: [(Child, Aabb); 2],
+}
+
+/// A built tree: nodes (depth first, children before grandchildren of later siblings) and the
+/// primitive indices in leaf order (leaf ranges index this list).
 struct Tree {
-    nodes: Vec<BvhNode>,
+    nodes: Vec<BuildNode>,
     order: Vec<u32>,
     bounds: Aabb,
+    /// `None` for an empty tree; a leaf when every primitive fits in one.
+    root: Option<Child>,
 }
 
 /// Builds a tree over primitive boxes. Primitives with non-finite bounds must be filtered out
 /// by the caller.
 fn build_tree(mut prims: Vec<Primitive>, options: &BuildOptions) -> Tree {
-    assert!((1..=MAX_LEAF_SIZE).contains(&options.max_leaf_size), "max_leaf_size must be 1..=16");
-    assert!(prims.len() < MAX_PRIMITIVES as usize, "too many primitives for one BVH");
+    assert!((1..=MAX_LEAF_SIZE).contains(&options.max_leaf_size), "max_leaf_size must be 1..={MAX_LEAF_SIZE}");
+    assert!(prims.len() <= MAX_PRIMITIVES as usize, "too many primitives for one BVH");
     let threads = match options.threads {
         0 => std::thread::available_parallelism().map_or(1, usize::from),
         n => n,
@@ -171,21 +203,58 @@ fn build_tree(mut prims: Vec<Primitive>, options: &BuildOptions) -> Tree {
     let spawn_depth = if threads > 1 { threads.next_power_of_two().trailing_zeros() + 2 } else { 0 };
     let builder = Builder { options, spawn_depth };
     let extent = Extent::of(&prims);
-    // A tree of n primitives has at most n - 1 inner nodes (plus the wrapper of a single-leaf
-    // root); reserving that much avoids regrowing, and pages never written cost nothing.
-    let mut nodes = Vec::with_capacity(prims.len().max(1));
-    if prims.is_empty() {
-        let (lo, hi) = BvhNode::EMPTY_BOX;
-        let empty = (ChildRef::leaf(0, 1), Vec3A::from(lo), Vec3A::from(hi));
-        nodes.push(BvhNode::new(empty, empty));
-    } else {
-        let root = builder.node(&mut prims, 0, 0, extent, &mut nodes);
-        if root.is_leaf() {
-            // The root must be an inner node; a single-leaf tree gets an empty sibling.
-            nodes.push(BvhNode::single((root, extent.bounds.lo, extent.bounds.hi)));
+    // A tree of n primitives has at most n - 1 inner nodes; reserving that much avoids
+    // regrowing, and pages never written cost nothing.
+    let mut nodes = Vec::with_capacity(prims.len());
+    let root = (!prims.is_empty()).then(|| builder.node(&mut prims, 0, 0, extent, &mut nodes));
+    Tree { nodes, order: prims.iter().map(Primitive::index).collect(), bounds: extent.bounds, root }
+}
+
+/// Lays `tree` out as rows after `rows` (the top level keeps its row 0 there): every node's
+/// record is followed, eventually, by its two children's records side by side (child A's
+/// subtree first), so a node names both with one offset. `leaf_rows` rows per primitive;
+/// `write_leaf(records, first, count)` fills a leaf's records for `order[first..first +
+/// count]`. Returns the rows and the root's reference.
+fn pack(
+    tree: &Tree,
+    mut rows: Vec<Row>,
+    leaf_rows: u32,
+    mut write_leaf: impl FnMut(&mut [Row], u32, u32),
+) -> (Vec<Row>, ChildRef) {
+    let Some(root) = tree.root else {
+        return (rows, ChildRef::NONE);
+    };
+    // Appends room for a child's record(s) and returns its reference.
+    let reserve = |rows: &mut Vec<Row>, child: Child| {
+        let at = u32::try_from(rows.len()).ok().filter(|&n| n < MAX_ROWS).expect("BVH too large for row offsets");
+        rows.resize(rows.len() + child_rows(child.kind(), leaf_rows) as usize, [0; 4]);
+        match child {
+            Child::Inner(_) => ChildRef::inner(at),
+            Child::Leaf { count, .. } => ChildRef::leaf(at, count),
+        }
+    };
+    let root_ref = reserve(&mut rows, root);
+    let mut todo = vec![(root, root_ref)];
+    while let Some((child, at)) = todo.pop() {
+        let start = at.offset() as usize;
+        match child {
+            Child::Leaf { first, count } => {
+                write_leaf(&mut rows[start..start + (count * leaf_rows) as usize], first, count);
+            }
+            Child::Inner(i) => {
+                let [(a, a_box), (b, b_box)] = tree.nodes[i as usize].children;
+                let (a_ref, b_ref) = (reserve(&mut rows, a), reserve(&mut rows, b));
+                let node = NodeRecord::encode(
+                    [(a.kind(), a_box.lo, a_box.hi), (b.kind(), b_box.lo, b_box.hi)],
+                    a_ref.offset(),
+                );
+                rows[start..start + NODE_ROWS as usize].copy_from_slice(&node.0);
+                // Child A's subtree is laid out first (popped first), then B's.
+                todo.extend([(b, b_ref), (a, a_ref)]);
+            }
         }
     }
-    Tree { nodes, order: prims.iter().map(Primitive::index).collect(), bounds: extent.bounds }
+    (rows, root_ref)
 }
 
 struct Builder<'a> {
@@ -234,15 +303,8 @@ impl Binning {
 
 impl Builder<'_> {
     /// Builds the subtree over `prims` (which start at `first` in the final leaf order) and
-    /// returns its reference; inner nodes are appended to `out` depth-first.
-    fn node(
-        &self,
-        prims: &mut [Primitive],
-        first: u32,
-        depth: u32,
-        extent: Extent,
-        out: &mut Vec<BvhNode>,
-    ) -> ChildRef {
+    /// returns it; inner nodes are appended to `out` depth-first.
+    fn node(&self, prims: &mut [Primitive], first: u32, depth: u32, extent: Extent, out: &mut Vec<BuildNode>) -> Child {
         let n = prims.len();
         let split = if depth < SAH_DEPTH { self.find_split(prims, &extent) } else { None };
         if n <= self.options.max_leaf_size as usize {
@@ -250,7 +312,7 @@ impl Builder<'_> {
             let leaf_cost = n as f32 * area;
             let split_cheaper = split.is_some_and(|s| self.options.traversal_cost * area + s.cost < leaf_cost);
             if !split_cheaper {
-                return ChildRef::leaf(first, n as u32);
+                return Child::Leaf { first, count: n as u32 };
             }
         }
         let (mid, [left_extent, right_extent]) = match split {
@@ -263,7 +325,8 @@ impl Builder<'_> {
         assert!(0 < mid && mid < n, "BVH split left a side empty");
         let (left, right) = prims.split_at_mut(mid);
         let at = out.len();
-        out.push(BvhNode::default());
+        let placeholder = (Child::Inner(0), Aabb::EMPTY);
+        out.push(BuildNode { children: [placeholder; 2] });
         let right_first = first + mid as u32;
         let (a, b) = if depth < self.spawn_depth && n >= PARALLEL_MIN {
             std::thread::scope(|s| {
@@ -281,11 +344,8 @@ impl Builder<'_> {
             let b = self.node(right, right_first, depth + 1, right_extent, out);
             (a, b)
         };
-        out[at] = BvhNode::new(
-            (a, left_extent.bounds.lo, left_extent.bounds.hi),
-            (b, right_extent.bounds.lo, right_extent.bounds.hi),
-        );
-        ChildRef::inner(at as u32)
+        out[at] = BuildNode { children: [(a, left_extent.bounds), (b, right_extent.bounds)] };
+        Child::Inner(at as u32)
     }
 
     /// Best binned SAH split over all three axes, or `None` when every centroid falls in
@@ -362,16 +422,15 @@ fn median_split(prims: &mut [Primitive], centroids: &Aabb) -> usize {
 }
 
 /// Appends a subtree built into its own vector, shifting its inner references by where it
-/// lands; returns the subtree root's reference, shifted likewise.
-fn append_rebased(out: &mut Vec<BvhNode>, nodes: Vec<BvhNode>, root: ChildRef) -> ChildRef {
+/// lands; returns the subtree root, shifted likewise.
+fn append_rebased(out: &mut Vec<BuildNode>, nodes: Vec<BuildNode>, root: Child) -> Child {
     let base = out.len() as u32;
-    let shift = |r: u32| if ChildRef(r).is_leaf() { r } else { r + base };
-    out.extend(nodes.into_iter().map(|mut n| {
-        n.a_ref = shift(n.a_ref);
-        n.b_ref = shift(n.b_ref);
-        n
-    }));
-    ChildRef(shift(root.0))
+    let shift = |c: Child| match c {
+        Child::Inner(i) => Child::Inner(i + base),
+        leaf => leaf,
+    };
+    out.extend(nodes.into_iter().map(|n| BuildNode { children: n.children.map(|(c, b)| (shift(c), b)) }));
+    shift(root)
 }
 
 impl MeshBvh {
@@ -393,10 +452,20 @@ impl MeshBvh {
         if prims.len() < count {
             log::warn!("BVH: left out {} invalid triangles of {count}", count - prims.len());
         }
+        let triangle_count = prims.len() as u32;
         let tree = build_tree(prims, options);
-        let triangles =
-            tree.order.iter().map(|&t| BvhTriangle::new(t, triangle(t as usize).expect("validated above"))).collect();
-        Self { nodes: tree.nodes, triangles, bounds_min: tree.bounds.lo.into(), bounds_max: tree.bounds.hi.into() }
+        let (rows, root) = pack(&tree, Vec::new(), TRIANGLE_ROWS, |records, first, count| {
+            for (i, &t) in tree.order[first as usize..(first + count) as usize].iter().enumerate() {
+                let v = triangle(t as usize).expect("validated above");
+                records[i * 3..i * 3 + 3].copy_from_slice(&triangle_rows(t, v));
+            }
+        });
+        let (bounds_min, bounds_max) = if root == ChildRef::NONE {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            (tree.bounds.lo.into(), tree.bounds.hi.into())
+        };
+        Self { rows, root, triangle_count, bounds_min, bounds_max }
     }
 }
 
@@ -435,7 +504,7 @@ impl Tlas {
     /// transformed). Instances of empty meshes, and with non-invertible or non-finite
     /// transforms, are left out: they cannot be hit.
     pub fn build(blas: &BlasPool, instances: &[InstanceDesc]) -> Self {
-        let mut records = Vec::with_capacity(instances.len());
+        let mut descs = Vec::with_capacity(instances.len());
         let mut prims = Vec::with_capacity(instances.len());
         for desc in instances {
             let mesh = &blas.meshes[desc.mesh as usize];
@@ -452,70 +521,76 @@ impl Tlas {
                 let p = Vec3A::from(m.transform_point3(local));
                 world.grow(p, p);
             }
-            let index = records.len() as u32;
-            prims.push(Primitive::new(world.lo, world.hi, index));
-            records.push(BvhInstance::new(desc, mesh));
+            prims.push(Primitive::new(world.lo, world.hi, descs.len() as u32));
+            descs.push(*desc);
         }
         let tree = build_tree(prims, &BuildOptions::INSTANCES);
-        let instances = tree.order.iter().map(|&i| records[i as usize]).collect();
-        Self { nodes: tree.nodes, instances }
+        let mut instances = Vec::with_capacity(descs.len());
+        let (mut rows, root) = pack(&tree, vec![[0; 4]], INSTANCE_ROWS, |record, first, _| {
+            let desc = descs[tree.order[first as usize] as usize];
+            record.copy_from_slice(&BvhInstance::new(&desc, &blas.meshes[desc.mesh as usize]).to_rows());
+            instances.push(desc);
+        });
+        rows[0][0] = root.0;
+        Self { rows, instances }
     }
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::accel::bvh::layout::read_triangle;
     use crate::accel::bvh::rays::SplitMix64;
 
-    /// Everything a correct tree satisfies: each primitive exactly once, child boxes contain
-    /// their primitives, leaves within the size limit, depth within the stack. Returns
-    /// (SAH cost with traversal cost 1, max inner depth, leaf count).
-    pub(crate) fn check_tree(nodes: &[BvhNode], triangles: &[BvhTriangle], max_leaf: u32) -> (f32, u32, u32) {
-        let mut seen = vec![false; triangles.len()];
-        let mut stack = vec![(ChildRef::ROOT, 1u32)];
+    /// Everything a correct tree satisfies: each triangle exactly once, every decoded box
+    /// (quantised) on the way contains the triangles under it, leaves within the size limit,
+    /// depth within the stack, children records after their parent and inside the tree.
+    /// Returns (SAH cost with traversal cost 1, over the decoded boxes; max inner depth; leaf
+    /// count).
+    pub(crate) fn check_tree(mesh: &MeshBvh, max_leaf: u32) -> (f32, u32, u32) {
+        let rows = &mesh.rows;
+        if mesh.root == ChildRef::NONE {
+            assert!(rows.is_empty() && mesh.triangle_count == 0);
+            return (0.0, 0, 0);
+        }
+        let mut seen = std::collections::HashSet::new();
         let (mut cost, mut max_depth, mut leaves) = (1.0f64, 0, 0);
-        let root = nodes[0].children();
-        let root_area = root
-            .iter()
-            .filter(|c| c.1[0] <= c.2[0])
-            .map(|c| Aabb { lo: c.1.into(), hi: c.2.into() })
-            .fold(Aabb::EMPTY, |a, b| a.union(&b))
-            .half_area()
-            .max(f32::MIN_POSITIVE) as f64;
-        while let Some((r, depth)) = stack.pop() {
-            max_depth = max_depth.max(depth);
+        let root_box = Aabb { lo: mesh.bounds_min.into(), hi: mesh.bounds_max.into() };
+        let root_area = root_box.half_area().max(f32::MIN_POSITIVE) as f64;
+        // (reference, inner depth, the boxes on the way down)
+        let mut stack = vec![(mesh.root, 0u32, vec![root_box])];
+        while let Some((r, depth, boxes)) = stack.pop() {
             assert!(depth as usize <= STACK_SIZE);
-            for (child, lo, hi) in nodes[r.node() as usize].children() {
-                if lo[0] > hi[0] {
-                    continue; // empty sibling of a single-leaf root
-                }
-                let bounds = Aabb { lo: lo.into(), hi: hi.into() };
-                let p = bounds.half_area() as f64 / root_area;
-                if child.is_leaf() {
-                    leaves += 1;
-                    let range = child.leaf_range();
-                    assert!(range.len() as u32 <= max_leaf);
-                    cost += p * range.len() as f64;
-                    for t in range {
-                        assert!(!seen[t as usize], "triangle {t} in two leaves");
-                        seen[t as usize] = true;
-                        for v in triangles[t as usize].vertices() {
-                            let v = Vec3A::from(v);
-                            assert!(v.cmpge(bounds.lo).all() && v.cmple(bounds.hi).all());
+            let at = r.offset() as usize;
+            let area = boxes.last().expect("root box").half_area() as f64 / root_area;
+            if r.is_leaf() {
+                leaves += 1;
+                assert!(r.kind() <= max_leaf);
+                cost += area * r.kind() as f64;
+                for t in 0..r.kind() as usize {
+                    let (prim, v) = read_triangle(&rows[at + 3 * t..]);
+                    assert!(seen.insert(prim), "triangle {prim} in two leaves");
+                    for b in &boxes {
+                        for v in v.map(Vec3A::from) {
+                            assert!(v.cmpge(b.lo).all() && v.cmple(b.hi).all(), "triangle {prim} outside a box");
                         }
                     }
-                } else {
-                    let inner = &nodes[child.node() as usize].children();
-                    for (_, clo, chi) in inner {
-                        assert!(Vec3A::from(*clo).cmpge(bounds.lo).all());
-                        assert!(Vec3A::from(*chi).cmple(bounds.hi).all());
-                    }
-                    cost += p;
-                    stack.push((child, depth + 1));
                 }
+                continue;
+            }
+            max_depth = max_depth.max(depth + 1);
+            cost += area;
+            let children = NodeRecord([rows[at], rows[at + 1]]).decode(TRIANGLE_ROWS);
+            assert!(children[0].0.offset() as usize > at, "children come after their parent");
+            for (child, (lo, hi)) in children {
+                let end = child.offset() + child_rows(child.kind(), TRIANGLE_ROWS);
+                assert!(end as usize <= rows.len());
+                let mut path = boxes.clone();
+                path.push(Aabb { lo: lo.into(), hi: hi.into() });
+                stack.push((child, depth + 1, path));
             }
         }
-        assert!(seen.iter().all(|&s| s), "a triangle is in no leaf");
+        assert_eq!(seen.len(), mesh.triangle_count as usize, "a triangle is in no leaf");
         (cost as f32, max_depth, leaves)
     }
 
@@ -536,24 +611,24 @@ pub(crate) mod tests {
 
     fn check(positions: &[Vec3], indices: &[u32], options: &BuildOptions) -> MeshBvh {
         let bvh = MeshBvh::build(positions, indices, options);
-        check_tree(&bvh.nodes, &bvh.triangles, options.max_leaf_size);
+        check_tree(&bvh, options.max_leaf_size);
         bvh
     }
 
     #[test]
-    fn empty_mesh_has_an_unhittable_root() {
+    fn empty_mesh_has_no_root() {
         let bvh = check(&[], &[], &BuildOptions::MESH);
-        assert_eq!(bvh.nodes.len(), 1);
-        assert!(bvh.triangles.is_empty());
+        assert_eq!(bvh.root, ChildRef::NONE);
+        assert!(bvh.rows.is_empty());
     }
 
     #[test]
     fn one_triangle() {
         let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let bvh = check(&p, &[0, 1, 2], &BuildOptions::MESH);
-        assert_eq!(bvh.nodes.len(), 1);
-        assert_eq!(bvh.triangles[0].primitive(), 0);
-        assert_eq!(ChildRef(bvh.nodes[0].a_ref).leaf_range(), 0..1);
+        // A tree that is one leaf has no node: the root is the leaf.
+        assert_eq!(bvh.root, ChildRef::leaf(0, 1));
+        assert_eq!(read_triangle(&bvh.rows), (0, [Vec3::ZERO, Vec3::X, Vec3::Y]));
         assert_eq!(bvh.bounds_max, Vec3::new(1.0, 1.0, 0.0));
     }
 
@@ -563,7 +638,7 @@ pub(crate) mod tests {
         let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let indices: Vec<u32> = (0..10_000).flat_map(|_| [0, 1, 2]).collect();
         let bvh = check(&p, &indices, &BuildOptions::MESH);
-        assert_eq!(bvh.triangles.len(), 10_000);
+        assert_eq!(bvh.triangle_count, 10_000);
     }
 
     #[test]
@@ -574,7 +649,7 @@ pub(crate) mod tests {
         positions.extend([Vec3::splat(0.5), Vec3::splat(f32::NAN), Vec3::new(0.1, 0.2, 0.3)]);
         indices.extend([n, n, n, n, n + 2, n + 2, n, n + 1, n + 2, 0, 1, n + 9]);
         let bvh = check(&positions, &indices, &BuildOptions::MESH);
-        assert_eq!(bvh.triangles.len(), 2002);
+        assert_eq!(bvh.triangle_count, 2002);
     }
 
     #[test]
@@ -600,7 +675,7 @@ pub(crate) mod tests {
                 })
                 .collect();
             let bvh = check(&flat, &indices, &BuildOptions::MESH);
-            let (cost, depth, _) = check_tree(&bvh.nodes, &bvh.triangles, 8);
+            let (cost, depth, _) = check_tree(&bvh, 8);
             assert!(depth < 30 && cost < 100.0, "axis {axis}: depth {depth} cost {cost}");
         }
     }
@@ -610,16 +685,15 @@ pub(crate) mod tests {
         let (positions, indices) = soup(60_000, 0.02, 3);
         let one = MeshBvh::build(&positions, &indices, &BuildOptions { threads: 1, ..BuildOptions::MESH });
         let four = MeshBvh::build(&positions, &indices, &BuildOptions { threads: 4, ..BuildOptions::MESH });
-        assert_eq!(one.nodes, four.nodes);
-        assert_eq!(one.triangles, four.triangles);
-        let (cost, depth, _) = check_tree(&four.nodes, &four.triangles, 8);
+        assert_eq!((one.root, &one.rows), (four.root, &four.rows));
+        let (cost, depth, _) = check_tree(&four, 8);
         assert!(cost > 0.0 && depth < 40, "cost {cost} depth {depth}");
     }
 
     #[test]
     fn leaf_size_limits_hold() {
         let (positions, indices) = soup(5000, 0.05, 11);
-        for max_leaf_size in [1, 4, 16] {
+        for max_leaf_size in [1, 4, MAX_LEAF_SIZE] {
             let options = BuildOptions { max_leaf_size, ..BuildOptions::MESH };
             check(&positions, &indices, &options);
         }

@@ -1,192 +1,230 @@
-//! GPU-ready BVH records (`#[repr(C)]`, Pod, std430-compatible) and the buffers that hold them.
+//! The packed GPU layout: every record is whole 16-byte rows ([`Row`], a `uvec4` in GLSL) of
+//! one buffer, and child boxes are quantised to bytes. See the module docs of [`super`] for
+//! the GLSL view.
 //!
-//! Every record is a whole number of 16-byte rows whose fourth word carries an integer, so
-//! GLSL can declare each as an array of `vec4`/`uvec4` in a std430 storage buffer and read
-//! the integers with `floatBitsToUint(.w)`. See the module docs of [`super`] for the GLSL view.
+//! Why so compact: lavapipe (the CPU Vulkan driver this backend must beat) runs 8 shader
+//! invocations per AVX2 vector, but a storage-buffer load at a different address per
+//! invocation costs a bounds-checked scalar load and a blend per 32-bit word and lane, while
+//! arithmetic costs one instruction for all 8 lanes. Words loaded per ray are what a traversal
+//! step costs, so nodes trade words for arithmetic: 8 words for two children instead of 14.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Vec3, Vec3A};
+
+/// One `uvec4` of the packed buffer.
+pub type Row = [u32; 4];
 
 /// Deepest traversal stack either level can need. The builder switches to median splits past
 /// [`super::build`]'s SAH depth limit so no tree is deeper than this many inner levels.
 pub const STACK_SIZE: usize = 64;
 
-/// Set in a child reference when the child is a leaf.
-pub const LEAF_BIT: u32 = 1 << 31;
-/// Bit position of `count - 1` in a leaf reference.
-pub const LEAF_COUNT_SHIFT: u32 = 27;
-/// Most primitives one leaf can hold (4 bits of `count - 1`).
-pub const MAX_LEAF_SIZE: u32 = 16;
-/// Largest first-primitive index a leaf can encode (27 bits), hence the most primitives one
-/// tree (one mesh, or the instances of one top level) can hold.
-pub const MAX_PRIMITIVES: u32 = 1 << LEAF_COUNT_SHIFT;
+/// Bit position of a child reference's kind (see [`ChildRef`]).
+pub const KIND_SHIFT: u32 = 28;
+/// Most primitives one leaf can hold (kind 15 is [`ChildRef::NONE`]'s).
+pub const MAX_LEAF_SIZE: u32 = 14;
+/// Offsets are 28-bit row counts: a tree (one mesh, or the top level) spans at most this
+/// many rows (4 GiB).
+pub const MAX_ROWS: u32 = 1 << KIND_SHIFT;
+
+/// Rows of an inner node record.
+pub const NODE_ROWS: u32 = 2;
+/// Rows of a triangle record.
+pub const TRIANGLE_ROWS: u32 = 3;
+/// Rows of an instance record (a top-level leaf).
+pub const INSTANCE_ROWS: u32 = 4;
 
 /// Instance flag: the instance's material is alpha-tested, so candidate hits go through the
 /// alpha callback (in GLSL: the shader's alpha test) before they are accepted.
 pub const INSTANCE_ALPHA_TESTED: u32 = 1;
 
-/// A child reference: an inner node index, or a leaf's primitive range.
-///
-/// Inner: the node's index (relative to the tree's first node). Leaf: `LEAF_BIT |
-/// (count - 1) << 27 | first`, `first` relative to the tree's first primitive. One `u32`
-/// describes either kind, so the traversal stack holds plain `u32`s.
+/// A child reference: `kind << 28 | offset`. Kind 0 is an inner node whose record starts
+/// `offset` rows into the tree; kind `n` in 1..=14 is a leaf of `n` triangle records (bottom
+/// level) or one instance record (top level, `n` = 1) starting there. One `u32` describes
+/// either, so the traversal stack holds plain `u32`s.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ChildRef(pub u32);
 
 impl ChildRef {
-    /// The root of every tree: inner node 0.
-    pub const ROOT: ChildRef = ChildRef(0);
+    /// No node: the root of an empty tree.
+    pub const NONE: ChildRef = ChildRef(u32::MAX);
 
-    pub fn inner(node: u32) -> Self {
-        debug_assert!(node & LEAF_BIT == 0);
-        ChildRef(node)
+    pub fn inner(offset: u32) -> Self {
+        debug_assert!(offset < MAX_ROWS);
+        ChildRef(offset)
     }
 
-    pub fn leaf(first: u32, count: u32) -> Self {
-        debug_assert!(first < MAX_PRIMITIVES && (1..=MAX_LEAF_SIZE).contains(&count));
-        ChildRef(LEAF_BIT | (count - 1) << LEAF_COUNT_SHIFT | first)
+    pub fn leaf(offset: u32, count: u32) -> Self {
+        debug_assert!(offset < MAX_ROWS && (1..=MAX_LEAF_SIZE).contains(&count));
+        ChildRef(count << KIND_SHIFT | offset)
     }
 
     pub fn is_leaf(self) -> bool {
-        self.0 & LEAF_BIT != 0
+        self.kind() != 0
     }
 
-    /// Inner node index (meaningful for inner references only).
-    pub fn node(self) -> u32 {
-        self.0
+    /// 0 for an inner node, else the leaf's primitive count.
+    pub fn kind(self) -> u32 {
+        self.0 >> KIND_SHIFT
     }
 
-    /// Leaf primitive range `first..first + count` (meaningful for leaf references only).
-    pub fn leaf_range(self) -> std::ops::Range<u32> {
-        let first = self.0 & (MAX_PRIMITIVES - 1);
-        let count = ((self.0 >> LEAF_COUNT_SHIFT) & (MAX_LEAF_SIZE - 1)) + 1;
-        first..first + count
+    /// First row of the child's record(s), relative to its tree.
+    pub fn offset(self) -> u32 {
+        self.0 & (MAX_ROWS - 1)
     }
 }
 
-/// Two-wide BVH node, 64 bytes: both children's boxes and references in one fetch.
+/// Rows a child of `kind` takes in a tree whose leaves are `leaf_rows` rows per primitive.
+pub fn child_rows(kind: u32, leaf_rows: u32) -> u32 {
+    if kind == 0 { NODE_ROWS } else { kind * leaf_rows }
+}
+
+/// An axis-aligned box as the traversal sees it.
+pub type Bounds = (Vec3, Vec3);
+
+/// Inner node, 2 rows: two children, whose records are adjacent (child A at `base`, child B
+/// right after it), with boxes quantised to bytes on a per-axis power-of-two grid anchored at
+/// the node's minimum corner (Ylitie, Karras, Laine 2017):
 ///
-/// Traversal tests both boxes from this one record and descends into the nearer child, so a
-/// node is only read when it is entered. Child B of a tree that is a single leaf (or of an
-/// empty tree) is [`BvhNode::EMPTY_BOX`] with min > max, which the sign-selected slab test of
-/// the traversal always misses; its reference is never read.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub a_min: [f32; 3],
-    /// [`ChildRef`] of child A.
-    pub a_ref: u32,
-    pub a_max: [f32; 3],
-    /// [`ChildRef`] of child B.
-    pub b_ref: u32,
-    pub b_min: [f32; 3],
-    pub pad0: u32,
-    pub b_max: [f32; 3],
-    pub pad1: u32,
-}
-
-impl BvhNode {
-    /// Bounds that no ray hits: min = +inf, max = -inf.
-    pub const EMPTY_BOX: ([f32; 3], [f32; 3]) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-
-    pub fn new(a: (ChildRef, Vec3A, Vec3A), b: (ChildRef, Vec3A, Vec3A)) -> Self {
-        Self {
-            a_min: a.1.into(),
-            a_ref: a.0.0,
-            a_max: a.2.into(),
-            b_ref: b.0.0,
-            b_min: b.1.into(),
-            pad0: 0,
-            b_max: b.2.into(),
-            pad1: 0,
-        }
-    }
-
-    /// A root whose child A is `a` and whose child B is empty.
-    pub fn single(a: (ChildRef, Vec3A, Vec3A)) -> Self {
-        let (lo, hi) = Self::EMPTY_BOX;
-        Self::new(a, (ChildRef::leaf(0, 1), Vec3A::from(lo), Vec3A::from(hi)))
-    }
-
-    pub fn children(&self) -> [(ChildRef, [f32; 3], [f32; 3]); 2] {
-        [(ChildRef(self.a_ref), self.a_min, self.a_max), (ChildRef(self.b_ref), self.b_min, self.b_max)]
-    }
-}
-
-/// One triangle in leaf order, 48 bytes: the three vertices in mesh-local space, read in one
-/// contiguous fetch by the watertight test. `v0[3]` is the original triangle index (index
-/// buffer offset / 3) bit-cast to f32; the other `w`s are 0.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhTriangle {
-    pub v0: [f32; 4],
-    pub v1: [f32; 4],
-    pub v2: [f32; 4],
-}
-
-impl BvhTriangle {
-    pub fn new(primitive: u32, v: [Vec3; 3]) -> Self {
-        Self {
-            v0: v[0].extend(f32::from_bits(primitive)).into(),
-            v1: v[1].extend(0.0).into(),
-            v2: v[2].extend(0.0).into(),
-        }
-    }
-
-    /// Original triangle index in the mesh's index buffer (offset / 3).
-    pub fn primitive(&self) -> u32 {
-        self.v0[3].to_bits()
-    }
-
-    pub fn vertices(&self) -> [Vec3; 3] {
-        [self.v0, self.v1, self.v2].map(|v| Vec3::new(v[0], v[1], v[2]))
-    }
-}
-
-/// One instance in top-level leaf order, 128 bytes.
+/// ```text
+/// row 0: origin.x, origin.y, origin.z (f32 bits), ex | ey << 8 | ez << 16 | kind_a << 24 | kind_b << 28
+/// row 1: qx, qy, qz, base   with q = a_lo | b_lo << 8 | a_hi << 16 | b_hi << 24 per axis
+/// ```
 ///
-/// Matrices are 3x4 row-major (three `vec4` rows, translation in `w`), the layout of
-/// `VkTransformMatrixKHR`: `p' = vec3(dot(r0, vec4(p, 1)), dot(r1, ..), dot(r2, ..))`.
+/// A plane decodes to `origin + q * 2^(e - 127)`; `q * 2^k` is exact, so the one rounding is
+/// the addition, and the builder picks `q` so the decoded box contains the child's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeRecord(pub [Row; 2]);
+
+impl NodeRecord {
+    /// Encodes children `(kind, box)` whose records start at `base`.
+    pub fn encode(children: [(u32, Vec3A, Vec3A); 2], base: u32) -> Self {
+        let origin = children[0].1.min(children[1].1);
+        let mut q = [0u32; 3];
+        let mut exponents = 0;
+        for axis in 0..3 {
+            let p = origin[axis];
+            let planes = children.map(|(_, lo, hi)| (lo[axis], hi[axis]));
+            let (e, [(a_lo, a_hi), (b_lo, b_hi)]) = quantize_axis(p, planes);
+            exponents |= e << (8 * axis);
+            q[axis] = a_lo | b_lo << 8 | a_hi << 16 | b_hi << 24;
+        }
+        let kinds = children[0].0 << 24 | children[1].0 << 28;
+        let o = origin.to_array().map(f32::to_bits);
+        NodeRecord([[o[0], o[1], o[2], exponents | kinds], [q[0], q[1], q[2], base]])
+    }
+
+    /// Both children's references (relative to the tree) and decoded boxes, computed exactly
+    /// as the shader does; `leaf_rows` as in [`child_rows`].
+    pub fn decode(&self, leaf_rows: u32) -> [(ChildRef, Bounds); 2] {
+        let [r0, r1] = self.0;
+        let origin = Vec3::new(f32::from_bits(r0[0]), f32::from_bits(r0[1]), f32::from_bits(r0[2]));
+        let step = Vec3::from_array([0, 1, 2].map(|a| f32::from_bits(((r0[3] >> (8 * a)) & 0xff) << 23)));
+        let plane = |shift: u32| {
+            let q = Vec3::from_array([0, 1, 2].map(|a| ((r1[a] >> shift) & 0xff) as f32));
+            origin + q * step
+        };
+        let (kind_a, kind_b) = ((r0[3] >> 24) & 0xf, r0[3] >> 28);
+        let base = r1[3];
+        let a = ChildRef(kind_a << KIND_SHIFT | base);
+        let b = ChildRef(kind_b << KIND_SHIFT | (base + child_rows(kind_a, leaf_rows)));
+        [(a, (plane(0), plane(16))), (b, (plane(8), plane(24)))]
+    }
+}
+
+/// `origin + q * step` in f32, as the shader decodes a plane.
+fn dequantize(origin: f32, q: u32, step: f32) -> f32 {
+    origin + q as f32 * step
+}
+
+/// The smallest biased exponent `e` (grid step `2^(e - 127)`, a normal float) whose bytes
+/// hold both children's planes on this axis conservatively (lower planes rounded down, upper
+/// up, as decoded in f32), and those bytes. `origin` is at most every lower plane.
+fn quantize_axis(origin: f32, planes: [(f32, f32); 2]) -> (u32, [(u32, u32); 2]) {
+    let top = planes[0].1.max(planes[1].1);
+    let extent = f64::from(top) - f64::from(origin);
+    let mut e = if extent > 0.0 { ((extent / 255.0).log2().ceil() as i32 + 127).clamp(1, 254) as u32 } else { 1 };
+    loop {
+        let step = f32::from_bits(e << 23);
+        let quantize = |(lo, hi): (f32, f32)| -> Option<(u32, u32)> {
+            let grid = |x: f32| (f64::from(x) - f64::from(origin)) / f64::from(step);
+            let mut q_lo = grid(lo).floor().clamp(0.0, 255.0) as u32;
+            while q_lo > 0 && dequantize(origin, q_lo, step) > lo {
+                q_lo -= 1;
+            }
+            let mut q_hi = grid(hi).ceil().clamp(0.0, 256.0) as u32;
+            while q_hi <= 255 && dequantize(origin, q_hi, step) < hi {
+                q_hi += 1;
+            }
+            (q_hi <= 255).then_some((q_lo, q_hi))
+        };
+        if let (Some(a), Some(b)) = (quantize(planes[0]), quantize(planes[1])) {
+            return (e, [a, b]);
+        }
+        assert!(e < 254, "BVH box too large to quantise");
+        e += 1;
+    }
+}
+
+/// Triangle record, 3 rows: the vertices (mesh-local, f32 bits) and, in row 0's `w`, the
+/// triangle's index in the mesh's index buffer (offset / 3).
+pub fn triangle_rows(primitive: u32, v: [Vec3; 3]) -> [Row; 3] {
+    let row = |p: Vec3, w: u32| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits(), w];
+    [row(v[0], primitive), row(v[1], 0), row(v[2], 0)]
+}
+
+/// The primitive index and vertices of the triangle record at `rows[0..3]`.
+pub fn read_triangle(rows: &[Row]) -> (u32, [Vec3; 3]) {
+    let v = |r: &Row| Vec3::new(f32::from_bits(r[0]), f32::from_bits(r[1]), f32::from_bits(r[2]));
+    (rows[0][3], [v(&rows[0]), v(&rows[1]), v(&rows[2])])
+}
+
+/// Instance record, 4 rows (64 bytes), a top-level leaf.
+///
+/// `world_to_object` is 3x4 row-major (three `vec4` rows, translation in `w`):
+/// `p' = vec3(dot(r0, vec4(p, 1)), dot(r1, ..), dot(r2, ..))`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhInstance {
     pub world_to_object: [[f32; 4]; 3],
-    pub object_to_world: [[f32; 4]; 3],
-    /// Index of the mesh's root node in the pooled node buffer; the mesh's inner references
-    /// are relative to it.
-    pub root_node: u32,
-    /// Index of the mesh's first triangle in the pooled triangle buffer; the mesh's leaf
-    /// ranges are relative to it.
-    pub first_triangle: u32,
+    /// First row of the mesh's tree in the pooled bottom levels ([`BlasPool::rows`]).
+    pub mesh_base: u32,
+    /// The mesh's root, relative to `mesh_base`.
+    pub root: u32,
     /// The instance id reported in hits (`gl_RayQueryGetIntersectionInstanceCustomIndexEXT`).
     pub custom_index: u32,
-    /// Low 8 bits: the instance is skipped when `mask & ray_mask == 0`.
-    pub mask: u32,
-    /// [`INSTANCE_ALPHA_TESTED`] or 0.
-    pub flags: u32,
-    pub mesh: u32,
-    pub material: u32,
-    pub pad: u32,
+    /// Bits 0..7: the instance is skipped when `mask & ray_mask == 0`; bit 8 and up: flags
+    /// ([`INSTANCE_ALPHA_TESTED`]).
+    pub mask_flags: u32,
 }
 
 impl BvhInstance {
     pub fn new(desc: &InstanceDesc, mesh: &MeshRange) -> Self {
+        let flags = if desc.alpha_tested { INSTANCE_ALPHA_TESTED } else { 0 };
         Self {
             world_to_object: rows(&desc.object_to_world.inverse()),
-            object_to_world: rows(&desc.object_to_world),
-            root_node: mesh.root_node,
-            first_triangle: mesh.first_triangle,
+            mesh_base: mesh.base,
+            root: mesh.root.0,
             custom_index: desc.custom_index,
-            mask: u32::from(desc.mask),
-            flags: if desc.alpha_tested { INSTANCE_ALPHA_TESTED } else { 0 },
-            mesh: desc.mesh,
-            material: desc.material,
-            pad: 0,
+            mask_flags: u32::from(desc.mask) | flags << 8,
         }
     }
 
+    /// The record as rows of the packed buffer.
+    pub fn to_rows(self) -> [Row; 4] {
+        bytemuck::cast(self)
+    }
+
+    /// The record at `rows[0..4]`.
+    pub fn read(rows: &[Row]) -> Self {
+        bytemuck::cast([rows[0], rows[1], rows[2], rows[3]])
+    }
+
+    pub fn mask(&self) -> u32 {
+        self.mask_flags & 0xff
+    }
+
     pub fn is_alpha_tested(&self) -> bool {
-        self.flags & INSTANCE_ALPHA_TESTED != 0
+        (self.mask_flags >> 8) & INSTANCE_ALPHA_TESTED != 0
     }
 }
 
@@ -222,59 +260,72 @@ pub struct InstanceDesc {
     pub material: u32,
 }
 
-/// The BVH of one mesh before pooling: nodes with tree-relative references, triangles in
-/// leaf order.
-#[derive(Clone, Debug, Default)]
+/// The BVH of one mesh before pooling: its rows (node and triangle records, references
+/// relative to row 0) and its root.
+#[derive(Clone, Debug)]
 pub struct MeshBvh {
-    pub nodes: Vec<BvhNode>,
-    pub triangles: Vec<BvhTriangle>,
+    pub rows: Vec<Row>,
+    /// [`ChildRef::NONE`] for a mesh without triangles; a leaf for one small enough.
+    pub root: ChildRef,
+    pub triangle_count: u32,
     /// Mesh-local bounds of the triangles in the tree (empty box when there are none).
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
 }
 
-/// Where one mesh's tree lives in the pooled buffers.
+/// Where one mesh's tree lives in the pooled rows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MeshRange {
-    pub root_node: u32,
-    pub node_count: u32,
-    pub first_triangle: u32,
+    pub base: u32,
+    pub root: ChildRef,
+    pub rows: u32,
     pub triangle_count: u32,
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
 }
 
-/// All bottom levels, pooled: one node buffer and one triangle buffer for every mesh, so the
-/// shader binds two buffers however many meshes there are. Built once per scene.
+/// All bottom levels, pooled: one run of rows for every mesh, so the shader binds one buffer
+/// however many meshes there are. Built once per scene.
 #[derive(Clone, Debug, Default)]
 pub struct BlasPool {
-    pub nodes: Vec<BvhNode>,
-    pub triangles: Vec<BvhTriangle>,
+    pub rows: Vec<Row>,
     pub meshes: Vec<MeshRange>,
 }
 
 impl BlasPool {
     /// Appends a mesh's tree and returns its mesh id (index into [`Self::meshes`]).
-    /// References stay relative to the mesh's range, so nothing is rewritten.
+    /// References stay relative to the mesh's first row, so nothing is rewritten.
     pub fn push(&mut self, mesh: MeshBvh) -> u32 {
         let range = MeshRange {
-            root_node: offset(self.nodes.len()),
-            node_count: offset(mesh.nodes.len()),
-            first_triangle: offset(self.triangles.len()),
-            triangle_count: offset(mesh.triangles.len()),
+            base: offset(self.rows.len()),
+            root: mesh.root,
+            rows: offset(mesh.rows.len()),
+            triangle_count: mesh.triangle_count,
             bounds_min: mesh.bounds_min,
             bounds_max: mesh.bounds_max,
         };
-        // The first mesh's buffers are taken over rather than copied (big single-mesh scenes).
-        if self.nodes.is_empty() && self.triangles.is_empty() {
-            self.nodes = mesh.nodes;
-            self.triangles = mesh.triangles;
+        // The first mesh's rows are taken over rather than copied (big single-mesh scenes).
+        if self.rows.is_empty() {
+            self.rows = mesh.rows;
         } else {
-            self.nodes.extend_from_slice(&mesh.nodes);
-            self.triangles.extend_from_slice(&mesh.triangles);
+            self.rows.extend_from_slice(&mesh.rows);
         }
         self.meshes.push(range);
         offset(self.meshes.len() - 1)
+    }
+
+    /// Every triangle of a mesh as (primitive index, vertices), in leaf order.
+    pub fn triangles(&self, mesh: u32) -> Vec<(u32, [Vec3; 3])> {
+        let m = &self.meshes[mesh as usize];
+        let rows = &self.rows[m.base as usize..(m.base + m.rows) as usize];
+        let mut out = Vec::with_capacity(m.triangle_count as usize);
+        for leaf in leaves(rows, m.root, TRIANGLE_ROWS) {
+            for t in 0..leaf.kind() {
+                let at = (leaf.offset() + t * TRIANGLE_ROWS) as usize;
+                out.push(read_triangle(&rows[at..]));
+            }
+        }
+        out
     }
 }
 
@@ -288,57 +339,113 @@ impl FromIterator<MeshBvh> for BlasPool {
     }
 }
 
-/// The top level: a tree over instance world bounds whose leaves index `instances` (in leaf
-/// order). Rebuilt whenever instances move; its size grows with instances, not triangles.
-#[derive(Clone, Debug, Default)]
+/// The leaves under `root` (depth first, A before B) of a tree whose leaves are `leaf_rows`
+/// rows per primitive.
+pub fn leaves(rows: &[Row], root: ChildRef, leaf_rows: u32) -> Vec<ChildRef> {
+    let mut out = Vec::new();
+    let mut todo = vec![root];
+    while let Some(r) = todo.pop() {
+        if r == ChildRef::NONE {
+            continue;
+        }
+        if r.is_leaf() {
+            out.push(r);
+            continue;
+        }
+        let at = r.offset() as usize;
+        let [a, b] = NodeRecord([rows[at], rows[at + 1]]).decode(leaf_rows);
+        todo.extend([b.0, a.0]);
+    }
+    out
+}
+
+/// The top level: row 0 holds the root reference (and, on the GPU, where the bottom levels
+/// start); node and instance records follow, references relative to row 0. Rebuilt whenever
+/// instances move; its size grows with instances, not triangles.
+#[derive(Clone, Debug)]
 pub struct Tlas {
-    pub nodes: Vec<BvhNode>,
-    pub instances: Vec<BvhInstance>,
+    pub rows: Vec<Row>,
+    /// The instances in the tree, in leaf (record) order.
+    pub instances: Vec<InstanceDesc>,
+}
+
+impl Default for Tlas {
+    fn default() -> Self {
+        Self { rows: vec![[ChildRef::NONE.0, 0, 0, 0]], instances: Vec::new() }
+    }
+}
+
+impl Tlas {
+    pub fn root(&self) -> ChildRef {
+        ChildRef(self.rows[0][0])
+    }
+
+    /// Rows the top level of `instances` instances can take: row 0, fewer than n inner
+    /// nodes and n instance records.
+    pub fn rows_for(instances: usize) -> usize {
+        1 + instances * (NODE_ROWS + INSTANCE_ROWS) as usize
+    }
 }
 
 /// A buffer offset as the `u32` the GPU records hold.
 fn offset(n: usize) -> u32 {
-    u32::try_from(n).expect("BVH buffer larger than u32 indices can address")
+    u32::try_from(n).ok().filter(|&n| n < MAX_ROWS).expect("BVH buffer larger than 28-bit row offsets address")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::mem::{align_of, offset_of, size_of};
+    use crate::accel::bvh::rays::SplitMix64;
+    use std::mem::{offset_of, size_of};
 
     #[test]
-    fn records_are_whole_std430_rows() {
-        assert_eq!(size_of::<BvhNode>(), 64);
-        assert_eq!(size_of::<BvhTriangle>(), 48);
-        assert_eq!(size_of::<BvhInstance>(), 128);
-        assert_eq!(align_of::<BvhNode>(), 4);
-        assert_eq!(offset_of!(BvhNode, a_ref), 12);
-        assert_eq!(offset_of!(BvhNode, b_ref), 28);
-        assert_eq!(offset_of!(BvhNode, b_min), 32);
-        assert_eq!(offset_of!(BvhNode, b_max), 48);
-        assert_eq!(offset_of!(BvhInstance, object_to_world), 48);
-        assert_eq!(offset_of!(BvhInstance, root_node), 96);
-        assert_eq!(offset_of!(BvhInstance, material), 120);
+    fn records_are_whole_rows() {
+        assert_eq!(size_of::<BvhInstance>(), 16 * INSTANCE_ROWS as usize);
+        assert_eq!(offset_of!(BvhInstance, mesh_base), 48);
+        assert_eq!(offset_of!(BvhInstance, mask_flags), 60);
     }
 
     #[test]
     fn child_refs_round_trip() {
-        let leaf = ChildRef::leaf(MAX_PRIMITIVES - 1, MAX_LEAF_SIZE);
-        assert!(leaf.is_leaf());
-        assert_eq!(leaf.leaf_range(), MAX_PRIMITIVES - 1..MAX_PRIMITIVES - 1 + MAX_LEAF_SIZE);
-        assert_eq!(ChildRef::leaf(5, 1).leaf_range(), 5..6);
+        let leaf = ChildRef::leaf(MAX_ROWS - 1, MAX_LEAF_SIZE);
+        assert!(leaf.is_leaf() && leaf != ChildRef::NONE);
+        assert_eq!((leaf.offset(), leaf.kind()), (MAX_ROWS - 1, MAX_LEAF_SIZE));
         let inner = ChildRef::inner(12345);
         assert!(!inner.is_leaf());
-        assert_eq!(inner.node(), 12345);
+        assert_eq!(inner.offset(), 12345);
+    }
+
+    #[test]
+    fn quantised_boxes_contain_the_originals() {
+        let mut rng = SplitMix64::new(5);
+        let mut v = |scale: f32| Vec3A::new(rng.unit(), rng.unit(), rng.unit()) * scale - scale * 0.5;
+        for i in 0..20_000 {
+            // Wide and tiny boxes, far from and near the origin, flat ones, touching ones.
+            let scale = [1e-6, 1e-3, 1.0, 1e4, 1e20][i % 5];
+            let centre = v(1e3) * if i % 7 == 0 { 0.0 } else { 1.0 };
+            let (a0, a1, b0, b1) = (centre + v(scale), centre + v(scale), centre + v(scale), centre + v(scale));
+            let mut a = (a0.min(a1), a0.max(a1));
+            let b = if i % 3 == 0 { a } else { (b0.min(b1), b0.max(b1)) };
+            if i % 11 == 0 {
+                a.1.y = a.0.y;
+            }
+            let node = NodeRecord::encode([(0, a.0, a.1), (3, b.0, b.1)], 77);
+            let [(ra, (alo, ahi)), (rb, (blo, bhi))] = node.decode(TRIANGLE_ROWS);
+            assert_eq!((ra, rb), (ChildRef::inner(77), ChildRef::leaf(77 + NODE_ROWS, 3)));
+            for (lo, hi, orig) in [(alo, ahi, a), (blo, bhi, b)] {
+                assert!(lo.cmple(Vec3::from(orig.0)).all() && hi.cmpge(Vec3::from(orig.1)).all(), "{i}: {orig:?}");
+                // Loose by at most a few grid steps of the node's extent.
+                let extent = (a.1.max(b.1) - a.0.min(b.0)).max_element();
+                let slack = (Vec3::from(orig.0) - lo).max(hi - Vec3::from(orig.1)).max_element();
+                assert!(slack <= extent / 64.0 + 1e-30 || extent == 0.0, "{i}: slack {slack} of {extent}");
+            }
+        }
     }
 
     #[test]
     fn triangle_keeps_primitive_bits() {
-        let t = BvhTriangle::new(0x7FC0_0001, [Vec3::ZERO, Vec3::X, Vec3::Y]);
-        assert_eq!(t.primitive(), 0x7FC0_0001);
-        assert_eq!(t.vertices(), [Vec3::ZERO, Vec3::X, Vec3::Y]);
-        let bytes: &[u8] = bytemuck::bytes_of(&t);
-        assert_eq!(&bytes[12..16], &0x7FC0_0001u32.to_ne_bytes());
+        let rows = triangle_rows(0x7FC0_0001, [Vec3::ZERO, Vec3::X, Vec3::Y]);
+        assert_eq!(read_triangle(&rows), (0x7FC0_0001, [Vec3::ZERO, Vec3::X, Vec3::Y]));
     }
 
     #[test]

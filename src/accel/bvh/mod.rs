@@ -1,47 +1,39 @@
 //! The project's own two-level BVH, traced by the compute-shader ray backend.
 //!
 //! - **Bottom level**, one tree per mesh in mesh-local space, built once ([`MeshBvh::build`])
-//!   and pooled with every other mesh's into one node buffer and one triangle buffer
-//!   ([`BlasPool`]); each mesh's references are relative to its own range, so pooling
-//!   rewrites nothing.
+//!   and pooled with every other mesh's into one run of rows ([`BlasPool`]); each mesh's
+//!   references are relative to its own first row, so pooling rewrites nothing.
 //! - **Top level** over the instances' world-space boxes ([`Tlas::build`]), rebuilt whenever
 //!   instances move: its cost and upload grow with the instance count, not triangles.
 //!
 //! Both levels use one binned-SAH builder (`build.rs`) and one node format.
 //!
-//! # GPU layout (std430; every record is whole `vec4` rows)
+//! # GPU layout: one buffer of `uvec4` rows (std430), every record whole rows
 //!
-//! ```glsl
-//! struct BvhNode {        // 64 bytes: both children, tested from one fetch
-//!     vec4 a_min;         // xyz = child A min, w = floatBitsToUint: child A reference
-//!     vec4 a_max;         // xyz = child A max, w = floatBitsToUint: child B reference
-//!     vec4 b_min;         // xyz = child B min, w unused
-//!     vec4 b_max;         // xyz = child B max, w unused
-//! };
-//! // reference: bit 31 clear = inner node index (relative to the tree's root);
-//! //            bit 31 set   = leaf: bits 27..30 = count - 1, bits 0..26 = first primitive
-//! //            (bottom: relative to the mesh's first_triangle; top: instance index).
-//! // Node 0 of every tree is its root and is always an inner node; an absent child has
-//! // min = +inf, max = -inf (a sign-selected slab test never hits it).
-//! struct BvhTriangle {    // 48 bytes, leaf order, mesh-local
-//!     vec4 v0;            // w = floatBitsToUint: triangle index in the mesh's index buffer / 3
-//!     vec4 v1;
-//!     vec4 v2;
-//! };
-//! struct BvhInstance {    // 128 bytes, top-level leaf order
-//!     vec4 world_to_object[3];   // row-major 3x4
-//!     vec4 object_to_world[3];   // row-major 3x4 (= VkTransformMatrixKHR)
-//!     uint root_node;            // mesh's root in the pooled node buffer
-//!     uint first_triangle;       // mesh's first triangle in the pooled triangle buffer
-//!     uint custom_index, mask, flags, mesh, material, pad;
-//! };
+//! ```text
+//! row 0                  (top-level root reference, first row of the bottom levels, 0, 0)
+//! rows 1..               top-level node and instance records; references relative to row 0
+//! rows blas_base..       every mesh's node and triangle records; references relative to
+//!                        the mesh's first row (its instances' mesh_base)
+//!
+//! reference (u32)        kind << 28 | offset: kind 0 = inner node record at row `offset`,
+//!                        kind n = leaf of n triangle records (bottom level) or one instance
+//!                        record (top level, n = 1) from row `offset`; 0xffffffff = none
+//! node (2 rows)          (origin.xyz as f32 bits, ex | ey << 8 | ez << 16 | kind_a << 24 | kind_b << 28)
+//!                        (qx, qy, qz, base): q = a_lo | b_lo << 8 | a_hi << 16 | b_hi << 24 per
+//!                        axis; plane = origin + q * 2^(e - 127); child A's record(s) at row
+//!                        `base`, child B's right after them
+//! triangle (3 rows)      (v0.xyz, primitive), (v1.xyz, 0), (v2.xyz, 0): mesh-local f32 bits,
+//!                        primitive = triangle index in the mesh's index buffer (offset / 3)
+//! instance (4 rows)      world_to_object (3 rows, row-major 3x4),
+//!                        (mesh_base, root reference, custom index, mask | flags << 8)
 //! ```
 //!
-//! Buffers: pooled bottom-level nodes ([`BlasPool::nodes`]) and triangles
-//! ([`BlasPool::triangles`]), both static; top-level nodes ([`Tlas::nodes`]) and instances
-//! ([`Tlas::instances`]), both rewritten when instances move. Top-level leaves index
-//! instances. [`traverse`] is the traversal the GLSL must mirror; each level's stack needs at
-//! most [`STACK_SIZE`] entries.
+//! Child boxes are quantised to bytes, conservatively (see layout.rs): lavapipe pays per
+//! 32-bit word a ray loads, so a node costs 8 words for two children, not 14. A mesh small
+//! enough for one leaf has no node at all (its root is the leaf). [`traverse`] is the
+//! traversal the GLSL must mirror, reading these very rows; each tree is at most
+//! [`STACK_SIZE`] inner levels deep, so one stack for both levels needs twice that.
 
 mod build;
 mod layout;
@@ -52,8 +44,8 @@ pub mod traverse;
 
 pub use build::{BINS, BuildOptions};
 pub use layout::{
-    BlasPool, BvhInstance, BvhNode, BvhTriangle, ChildRef, INSTANCE_ALPHA_TESTED, InstanceDesc, LEAF_BIT,
-    LEAF_COUNT_SHIFT, MAX_LEAF_SIZE, MAX_PRIMITIVES, MeshBvh, MeshRange, STACK_SIZE, Tlas,
+    BlasPool, BvhInstance, ChildRef, INSTANCE_ALPHA_TESTED, INSTANCE_ROWS, InstanceDesc, KIND_SHIFT, MAX_LEAF_SIZE,
+    MeshBvh, MeshRange, NODE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas,
 };
 pub use morton::morton_order;
 pub use scene_bvh::instance_descs;

@@ -23,7 +23,7 @@
 //! wrapping.
 
 use super::SceneBvh;
-use super::layout::transform_point;
+use super::layout::{rows, transform_point};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
@@ -70,11 +70,10 @@ pub fn triangle_bounds(bvh: &SceneBvh) -> (Vec3, Vec3) {
     let mut lo = Vec3::INFINITY;
     let mut hi = Vec3::NEG_INFINITY;
     for inst in &bvh.tlas.instances {
-        let count = bvh.blas.meshes[inst.mesh as usize].triangle_count as usize;
-        let first = inst.first_triangle as usize;
-        for tri in &bvh.blas.triangles[first..first + count] {
-            for v in tri.vertices() {
-                let w = transform_point(&inst.object_to_world, v);
+        let object_to_world = rows(&inst.object_to_world);
+        for (_, vertices) in bvh.blas.triangles(inst.mesh) {
+            for v in vertices {
+                let w = transform_point(&object_to_world, v);
                 lo = lo.min(w);
                 hi = hi.max(w);
             }

@@ -80,12 +80,12 @@ mod tests {
         let mut bvh = SceneBvh::build(&scene, &pose(0.0));
         assert_eq!(bvh.blas.meshes.len(), 2);
         let masked = bvh.tlas.instances.iter().find(|i| i.custom_index == 1).expect("instance 1");
-        assert!(masked.is_alpha_tested() && masked.material == 1);
+        assert!(masked.alpha_tested && masked.material == 1);
         let ray = |bvh: &SceneBvh| closest_hit(bvh, Vec3::new(5.2, 0.2, 1.0), -Vec3::Z, 0.0, 100.0, 0xFF, accept_all);
         assert_eq!(ray(&bvh).map(|h| (h.instance, h.t)), Some((0, 1.0)));
-        let blas_nodes = bvh.blas.nodes.clone();
+        let blas_rows = bvh.blas.rows.clone();
         bvh.update_instances(&scene, &pose(-2.0));
         assert_eq!(ray(&bvh).map(|h| (h.instance, h.t)), Some((0, 3.0)));
-        assert_eq!(bvh.blas.nodes, blas_nodes);
+        assert_eq!(bvh.blas.rows, blas_rows);
     }
 }

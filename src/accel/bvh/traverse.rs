@@ -27,7 +27,10 @@
 //!   accepts or ignores them; `any_hit` stops at the first accepted candidate.
 
 use super::SceneBvh;
-use super::layout::{BvhInstance, BvhNode, BvhTriangle, ChildRef, STACK_SIZE, transform_point, transform_vector};
+use super::layout::{
+    Bounds, BvhInstance, ChildRef, INSTANCE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, read_triangle,
+    transform_point, transform_vector,
+};
 use glam::Vec3;
 
 /// Widening of a box's far distance: 1 + 2*gamma(3) with gamma(n) = n*eps / (1 - n*eps) and
@@ -128,7 +131,7 @@ impl RaySpace {
     }
 
     /// Entry distance if the box overlaps `[tmin, tmax]` along the ray.
-    fn hit_box(&self, lo: &[f32; 3], hi: &[f32; 3], tmin: f32, tmax: f32) -> Option<f32> {
+    fn hit_box(&self, (lo, hi): Bounds, tmin: f32, tmax: f32) -> Option<f32> {
         let (mut near, mut far) = (tmin, tmax);
         for a in 0..3 {
             let (n, f) = if self.inv_dir[a] >= 0.0 { (lo[a], hi[a]) } else { (hi[a], lo[a]) };
@@ -139,8 +142,8 @@ impl RaySpace {
     }
 
     /// Watertight ray/triangle test: (t, u, v, front_face) when hit within `[tmin, tmax]`.
-    fn hit_triangle(&self, tri: &BvhTriangle, tmin: f32, tmax: f32) -> Option<(f32, f32, f32, bool)> {
-        let [a, b, c] = tri.vertices().map(|v| v - self.origin);
+    fn hit_triangle(&self, vertices: [Vec3; 3], tmin: f32, tmax: f32) -> Option<(f32, f32, f32, bool)> {
+        let [a, b, c] = vertices.map(|v| v - self.origin);
         let shear = |p: Vec3| (p[self.kx] - self.sx * p[self.kz], p[self.ky] - self.sy * p[self.kz]);
         let ((ax, ay), (bx, by), (cx, cy)) = (shear(a), shear(b), shear(c));
         let mut u = cx * by - cy * bx;
@@ -211,12 +214,12 @@ impl Stack {
     }
 }
 
-/// Tests both children of `node`; returns the child to enter next (pushing the farther one
-/// when both are hit), or `None` when neither is.
-fn visit(node: &BvhNode, ray: &RaySpace, tmin: f32, tmax: f32, stack: &mut Stack) -> Option<ChildRef> {
-    let ta = ray.hit_box(&node.a_min, &node.a_max, tmin, tmax);
-    let tb = ray.hit_box(&node.b_min, &node.b_max, tmin, tmax);
-    let (a, b) = (ChildRef(node.a_ref), ChildRef(node.b_ref));
+/// Tests both children of the node record at `rows[0..2]`; returns the child to enter next
+/// (pushing the farther one when both are hit), or `None` when neither is.
+fn visit(rows: &[Row], leaf_rows: u32, ray: &RaySpace, tmin: f32, tmax: f32, stack: &mut Stack) -> Option<ChildRef> {
+    let [(a, a_box), (b, b_box)] = NodeRecord([rows[0], rows[1]]).decode(leaf_rows);
+    let ta = ray.hit_box(a_box, tmin, tmax);
+    let tb = ray.hit_box(b_box, tmin, tmax);
     match (ta, tb) {
         (Some(ta), Some(tb)) if tb < ta => {
             stack.push(a, ta);
@@ -234,7 +237,9 @@ fn visit(node: &BvhNode, ray: &RaySpace, tmin: f32, tmax: f32, stack: &mut Stack
 
 /// The instance whose mesh the traversal is in.
 struct Inside<'a> {
-    instance: &'a BvhInstance,
+    instance: BvhInstance,
+    /// The mesh's rows (its references are relative to their start).
+    rows: &'a [Row],
     /// Stack depth when it was entered: the entries below belong to the top level.
     stack_base: usize,
     /// The ray in its object space.
@@ -246,9 +251,10 @@ struct Inside<'a> {
 /// One loop walks both levels with one stack, as the shader does: each step tests the next
 /// triangle of the current leaf, or, with none left, pops (leaving the instance once only
 /// top-level entries remain), visits an inner node and starts the leaf it leads to. A
-/// top-level leaf is one instance: entering it switches to its object-space ray and its
-/// mesh's tree. The shader takes these steps in the same order (one of each kind per loop
-/// iteration, so that SIMD lanes at different levels advance together).
+/// top-level leaf is one instance record: entering it switches to its object-space ray and
+/// its mesh's tree, starting at the mesh's root (which may be a leaf). The shader takes these
+/// steps in the same order (one of each kind per loop iteration, so that SIMD lanes at
+/// different levels advance together).
 fn trace(
     bvh: &SceneBvh,
     world: &RaySpace,
@@ -261,13 +267,14 @@ fn trace(
     let mut closest = Closest { t: tmax, hit: None };
     let mut stack = Stack::new();
     let mut inside: Option<Inside> = None;
-    let mut triangles = 0..0;
-    let mut current = Some(ChildRef::ROOT);
+    // The current leaf's triangle records not yet tested: rows tri_next..tri_end.
+    let (mut tri_next, mut tri_end) = (0, 0);
+    let mut current = Some(bvh.tlas.root()).filter(|&r| r != ChildRef::NONE);
     loop {
-        if let (Some(i), Some(inst)) = (triangles.next(), &inside) {
-            let tri = &bvh.blas.triangles[(inst.instance.first_triangle + i) as usize];
-            if let Some((t, u, v, front_face)) = inst.ray.hit_triangle(tri, tmin, closest.t) {
-                let primitive = tri.primitive();
+        if let (true, Some(inst)) = (tri_next < tri_end, &inside) {
+            let (primitive, vertices) = read_triangle(&inst.rows[tri_next as usize..]);
+            tri_next += TRIANGLE_ROWS;
+            if let Some((t, u, v, front_face)) = inst.ray.hit_triangle(vertices, tmin, closest.t) {
                 let instance = inst.instance.custom_index;
                 if !inst.instance.is_alpha_tested() || alpha(instance, primitive, u, v) {
                     closest.t = t;
@@ -278,7 +285,7 @@ fn trace(
                 }
             }
         }
-        if !triangles.is_empty() {
+        if tri_next < tri_end {
             continue;
         }
         let r = match current {
@@ -297,23 +304,25 @@ fn trace(
         current = if r.is_leaf() {
             Some(r)
         } else {
-            let (nodes, ray) = match &inside {
-                Some(i) => (&bvh.blas.nodes[i.instance.root_node as usize..], &i.ray),
-                None => (&bvh.tlas.nodes[..], world),
-            };
-            visit(&nodes[r.node() as usize], ray, tmin, closest.t, &mut stack)
+            let at = r.offset() as usize;
+            match &inside {
+                Some(i) => visit(&i.rows[at..], TRIANGLE_ROWS, &i.ray, tmin, closest.t, &mut stack),
+                None => visit(&bvh.tlas.rows[at..], INSTANCE_ROWS, world, tmin, closest.t, &mut stack),
+            }
         };
         if let Some(leaf) = current.filter(|r| r.is_leaf()) {
             current = None;
+            let at = leaf.offset();
             if inside.is_some() {
-                triangles = leaf.leaf_range();
+                (tri_next, tri_end) = (at, at + leaf.kind() * TRIANGLE_ROWS);
             } else {
-                debug_assert_eq!(leaf.leaf_range().len(), 1, "top-level leaves hold one instance");
-                let instance = &bvh.tlas.instances[leaf.leaf_range().start as usize];
-                if instance.mask & mask != 0 {
-                    let ray = world.in_object_space(instance);
-                    inside = Some(Inside { instance, stack_base: stack.len, ray });
-                    current = Some(ChildRef::ROOT);
+                debug_assert_eq!(leaf.kind(), 1, "a top-level leaf is one instance");
+                let instance = BvhInstance::read(&bvh.tlas.rows[at as usize..]);
+                if instance.mask() & mask != 0 {
+                    let ray = world.in_object_space(&instance);
+                    let rows = &bvh.blas.rows[instance.mesh_base as usize..];
+                    inside = Some(Inside { instance, rows, stack_base: stack.len, ray });
+                    current = Some(ChildRef(instance.root));
                 }
             }
         }
@@ -415,15 +424,12 @@ pub(crate) mod tests {
     fn brute_force(bvh: &SceneBvh, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
         let world = RaySpace::new(origin, dir);
         let mut best: Option<Hit> = None;
-        for inst in &bvh.tlas.instances {
-            let local = world.in_object_space(inst);
-            let mesh = &bvh.blas.meshes[inst.mesh as usize];
-            let first = mesh.first_triangle as usize;
-            for tri in &bvh.blas.triangles[first..first + mesh.triangle_count as usize] {
+        for desc in &bvh.tlas.instances {
+            let local = world.in_object_space(&BvhInstance::new(desc, &bvh.blas.meshes[desc.mesh as usize]));
+            for (primitive, vertices) in bvh.blas.triangles(desc.mesh) {
                 let t_far = best.map_or(tmax, |h| h.t);
-                if let Some((t, u, v, front_face)) = local.hit_triangle(tri, tmin, t_far) {
-                    let primitive = tri.primitive();
-                    best = Some(Hit { instance: inst.custom_index, primitive, t, u, v, front_face });
+                if let Some((t, u, v, front_face)) = local.hit_triangle(vertices, tmin, t_far) {
+                    best = Some(Hit { instance: desc.custom_index, primitive, t, u, v, front_face });
                 }
             }
         }
@@ -607,17 +613,17 @@ pub(crate) mod tests {
     #[test]
     fn empty_scene_and_moved_instances() {
         let empty = SceneBvh::default();
-        assert_eq!(empty.tlas.nodes.len(), 0);
+        assert_eq!((empty.tlas.root(), empty.tlas.rows.len()), (ChildRef::NONE, 1));
         let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let blas = [MeshBvh::build(&p, &[0, 1, 2], &BuildOptions::MESH)].into_iter().collect();
         let mut bvh = SceneBvh::new(blas, &[]);
         let (o, d) = (Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
         assert!(closest_hit(&bvh, o, d, 0.0, 10.0, 0xFF, accept_all).is_none());
         bvh.set_instances(&[instance(Affine3A::from_translation(Vec3::Z * -3.0), 0, 1)]);
-        let nodes_before = bvh.blas.nodes.len();
+        let rows_before = bvh.blas.rows.clone();
         let h = closest_hit(&bvh, o, d, 0.0, 10.0, 0xFF, accept_all).expect("moved instance");
         assert!((h.t - 4.0).abs() < 1e-6);
-        assert_eq!(bvh.blas.nodes.len(), nodes_before);
+        assert_eq!(bvh.blas.rows, rows_before);
     }
 
     /// Build time and CPU ray rates on ~1M-triangle meshes, for the default options and the
@@ -634,14 +640,15 @@ pub(crate) mod tests {
             for (threads, traversal_cost) in [(1, 1.5), (0, 1.5), (0, 1.0), (0, 2.0)] {
                 let options = BuildOptions { threads, traversal_cost, ..BuildOptions::MESH };
                 let mut best = f64::MAX;
-                let mut mesh = MeshBvh::default();
+                let mut mesh = None;
                 for _ in 0..3 {
                     let start = Instant::now();
-                    mesh = MeshBvh::build(positions, indices, &options);
+                    mesh = Some(MeshBvh::build(positions, indices, &options));
                     best = best.min(start.elapsed().as_secs_f64());
                 }
-                let (sah, depth, leaves) = check_tree(&mesh.nodes, &mesh.triangles, options.max_leaf_size);
-                let nodes = mesh.nodes.len();
+                let mesh = mesh.expect("built");
+                let (sah, depth, leaves) = check_tree(&mesh, options.max_leaf_size);
+                let rows = mesh.rows.len();
                 let bvh = SceneBvh::new([mesh].into_iter().collect(), &[instance(Affine3A::IDENTITY, 0, 0)]);
                 let (lo, hi) = triangle_bounds(&bvh);
                 let view = BenchView::new(lo, hi);
@@ -654,7 +661,7 @@ pub(crate) mod tests {
                 let shadows = shadow.len();
                 println!(
                     "  threads {threads} traversal cost {traversal_cost}: build {ms:.0} ms; \
-                     {nodes} nodes, SAH {sah:.2}, depth {depth}, {leaves} leaves; \
+                     {rows} rows, SAH {sah:.2}, depth {depth}, {leaves} leaves; \
                      Mrays/s on 2 threads: primary {primary_rate:.2}, \
                      shadow {shadow_rate:.2} ({shadows} rays), incoherent {incoherent_rate:.2}"
                 );

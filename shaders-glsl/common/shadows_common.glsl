@@ -1,0 +1,37 @@
+// Shared by the adaptive soft-shadow passes (shadows, shadows_penumbra, shadows_tent_h/_v,
+// shadows_filter), after Ray Tracing Gems ch. 13 (Boksansky, Wimmer, Bittner): visibility of
+// up to four punctual lights, one per RGBA channel; lights with a radius are area lights
+// (sphere for point lights, disk for spots) and get adaptive sample counts, filtering and a
+// 4-frame history; lights without one are hard: one ray, no filtering.
+#ifndef SHADOWS_COMMON_GLSL
+#define SHADOWS_COMMON_GLSL
+
+#include "scene.glsl"
+
+#define SHADOW_LIGHTS 4
+
+layout(push_constant) uniform ShadowParams {
+    uint s_max;          // most shadow rays per pixel and light (5 standard, 8 high)
+    float delta;         // penumbra threshold on the filtered visibility variation
+    float eta;           // variation at which the filter reaches its widest (9 taps)
+    float budget;        // the image's summed variation above which s_max is lowered
+    uint forced_blocks;  // 1: 8x8 blocks rotating over 4 frames are always sampled
+    uint tent_axis;      // shadows_tent: 0 horizontal, 1 vertical
+} sp;
+
+// Which of the first four lights are soft (have a radius): a bool per channel.
+bvec4 soft_lights() {
+    bvec4 s = bvec4(false);
+    for (uint i = 0u; i < min(frame.light_count, 4u); ++i) s[i] = lights[i].radius > 0.0;
+    return s;
+}
+
+// Eq. 13.7: the previous depth at the reprojected position belongs to this surface when
+// |1 - z_prev / z| < c1 + c2 (1 - |n_z|), n_z the camera-space normal's z (oblique surfaces
+// tolerate more), c1 = 0.003, c2 = 0.017.
+bool depth_consistent(float z, float z_prev, vec3 normal_world) {
+    float nz = abs(dot(normal_world, frame.inv_view[2].xyz));
+    return abs(1.0 - z_prev / max(z, 1e-6)) < 0.003 + 0.017 * (1.0 - nz);
+}
+
+#endif

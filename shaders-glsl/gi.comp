@@ -1,0 +1,112 @@
+#version 460
+// gi: diffuse global illumination, demodulated (divided by the diffuse albedo) so the denoiser
+// keeps texture detail: per pixel one cosine-sampled bounce plus one light sample.
+//
+// What it covers, so that nothing is counted twice (see composite.comp):
+// - direct light on the diffuse lobe from emissive triangles and the environment: a light
+//   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
+//   chosen) and the bounce ray hitting an emitter or escaping, combined with the power
+//   heuristic;
+// - one-bounce indirect light: at the bounce ray's hit, next-event estimation toward a light
+//   chosen by power (any kind, with a shadow ray); with `bounces` > 1 the path continues by
+//   BSDF sampling, with a light sample at each vertex.
+#extension GL_GOOGLE_include_directive : require
+#include "common/trace.glsl"
+#include "common/brdf.glsl"
+#include "common/light_sampling.glsl"
+#include "common/gbuffer.glsl"
+#include "common/ray_offset.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
+layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;
+layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
+
+layout(push_constant) uniform Params {
+    uint bounces;  // scattering events after the primary surface (1 = one bounce)
+    uint seed;
+} params;
+
+#define SALT_GI 0x67690000u
+
+// Light leaving surface `s` toward -dir: a light sample at s (all lights), and with more
+// bounces allowed, the rest of the path by BSDF sampling.
+vec3 outgoing(HitSurface s, vec3 dir, uint bounces_left, inout Rng rng) {
+    vec3 radiance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    for (;;) {
+        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
+        vec3 v = -dir;
+        vec3 leave = offset_ray(s.position, s.normal_geo);
+        NeeSample ls = light_sample(s.position, rng_next3(rng));
+        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) {
+            vec3 f = brdf_eval_cos(m, s.normal, v, ls.dir);
+            if (dot(f, f) > 0.0 && !trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
+                // The path ends here (no BSDF continuation can reach this light with MIS):
+                // full weight.
+                radiance += throughput * f * ls.weight;
+            }
+        }
+        if (--bounces_left == 0u) break;
+        BrdfSample bs = brdf_sample(m, s.normal, v, rng_next3(rng));
+        if (bs.pdf <= 0.0 || dot(bs.l, s.normal_geo) <= 0.0) break;
+        throughput *= bs.weight;
+        Hit h = trace_closest(leave, bs.l, 0.0, 1e6, RAY_MASK_ALL);
+        if (h.instance == NO_HIT) break;
+        dir = bs.l;
+        s = hit_surface(h.instance, h.primitive, h.bary, dir);
+    }
+    return radiance;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - imageLoad(g_metal_rough, px).x);
+    if (imageLoad(g_ids, px).x == NO_INSTANCE || max(albedo.r, max(albedo.g, albedo.b)) <= 0.0) {
+        imageStore(out_radiance, px, vec4(0.0));
+        return;
+    }
+    Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
+    float depth = imageLoad(g_depth, px).r;
+    vec3 n = imageLoad(g_normal, px).xyz;
+    vec3 ng = imageLoad(g_normal_geo, px).xyz;
+    vec3 p = world_position(px, depth);
+    vec3 origin = offset_ray_origin(p, ng, depth);
+    // Estimates of the incident radiance integral (1/pi) int L cos: the Lambert lobe without
+    // its albedo.
+    vec3 l_sum = vec3(0.0);
+
+    // Direct light from emitters and the environment, light-sampled.
+    NeeSample ls = light_sample(p, rng_next3(rng));
+    if (ls.pdf > 0.0 && dot(ls.dir, ng) > 0.0) {
+        float cos_l = max(dot(n, ls.dir), 0.0);
+        if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
+            l_sum += ls.weight * cos_l * INV_PI * mis_power(ls.pdf, cos_l * INV_PI);
+        }
+    }
+
+    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface.
+    vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
+    float pdf = max(dot(n, dir), 0.0) * INV_PI;
+    if (dot(dir, ng) > 0.0 && pdf > 0.0) {
+        Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
+        // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
+        if (h.instance == NO_HIT) {
+            l_sum += env_eval(dir) * mis_power(pdf, light_pdf_environment(dir));
+        } else {
+            HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+            if (emitter_visible_side(h.instance, h.primitive, dir)) {
+                float lp = light_pdf_emitter(h.instance, h.primitive, origin, s.position);
+                l_sum += s.mat.emissive * mis_power(pdf, lp);
+            }
+            l_sum += outgoing(s, dir, max(params.bounces, 1u), rng);
+        }
+    }
+    imageStore(out_radiance, px, vec4(l_sum, 1.0));
+}

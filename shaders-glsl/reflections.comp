@@ -1,0 +1,114 @@
+#version 460
+// reflections: the specular lobe, ray traced. Per pixel `rays` directions drawn from the GGX
+// distribution of visible normals (a perfect mirror reflects exactly); each hit is shaded with
+// its emission and a light sample toward a light chosen by power (with a shadow ray); rays that
+// escape see the environment. Surfaces rougher than the cut-off trace nothing and take the
+// environment in the mirror direction instead. The output is the lobe's contribution (Fresnel
+// and shadowing included), ready to add; the hit distance goes alongside for the denoiser.
+#extension GL_GOOGLE_include_directive : require
+#include "common/trace.glsl"
+#include "common/brdf.glsl"
+#include "common/light_sampling.glsl"
+#include "common/gbuffer.glsl"
+#include "common/ray_offset.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
+layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;
+layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 1, binding = 7, r32f) uniform writeonly image2D out_hit_distance;
+
+layout(push_constant) uniform Params {
+    uint rays;                // specular rays per pixel
+    float roughness_cutoff;   // rougher surfaces use the environment fallback
+    uint seed;
+} params;
+
+#define SALT_REFLECTIONS 0x72656600u
+// Below this roughness the surface is a mirror: one exact reflection, no sampling.
+#define MIRROR_ROUGHNESS 0.01
+
+// Radiance leaving a hit toward -dir: emission plus one light sample.
+vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
+    HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+    vec3 radiance = emitter_visible_side(h.instance, h.primitive, dir) ? s.mat.emissive : vec3(0.0);
+    BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
+    NeeSample ls = light_sample(s.position, rng_next3(rng));
+    if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) {
+        vec3 f = brdf_eval_cos(m, s.normal, -dir, ls.dir);
+        vec3 leave = offset_ray(s.position, s.normal_geo);
+        if (dot(f, f) > 0.0 && !trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
+            radiance += f * ls.weight;
+        }
+    }
+    return radiance;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    if (imageLoad(g_ids, px).x == NO_INSTANCE) {
+        imageStore(out_radiance, px, vec4(0.0));
+        imageStore(out_hit_distance, px, vec4(0.0));
+        return;
+    }
+    float depth = imageLoad(g_depth, px).r;
+    vec3 n = imageLoad(g_normal, px).xyz;
+    vec3 ng = imageLoad(g_normal_geo, px).xyz;
+    vec3 p = world_position(px, depth);
+    vec3 v = -camera_ray_dir(vec2(px) + 0.5 - frame.jitter);
+    vec4 mr = imageLoad(g_metal_rough, px);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
+    vec3 f0 = brdf_f0(m);
+    float n_dot_v = max(dot(n, v), 1e-4);
+
+    if (m.roughness > params.roughness_cutoff) {
+        // Fallback: the environment in the mirror direction times the lobe's Fresnel.
+        vec3 r = reflect(-v, n);
+        imageStore(out_radiance, px, vec4(env_eval(r) * fresnel_schlick(f0, n_dot_v), 1.0));
+        imageStore(out_hit_distance, px, vec4(0.0));
+        return;
+    }
+    Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
+    vec3 origin = offset_ray_origin(p, ng, depth);
+    mat3 basis = orthonormal_basis(n);
+    vec3 v_local = vec3(dot(v, basis[0]), dot(v, basis[1]), n_dot_v);
+    float alpha = ggx_alpha(m.roughness);
+    uint count = max(params.rays, 1u);
+    vec3 sum = vec3(0.0);
+    float dist_sum = 0.0, hits = 0.0;
+    for (uint i = 0u; i < count; ++i) {
+        vec3 l, weight;
+        if (m.roughness < MIRROR_ROUGHNESS) {
+            l = reflect(-v, n);
+            weight = fresnel_schlick(f0, n_dot_v);
+        } else {
+            // Visible-normal sampling: the estimate f cos / pdf of the GGX lobe reduces to
+            // F(v.h) G2(v, l) / G1(v).
+            vec3 h_local = sample_ggx_vndf(v_local, alpha, rng_next2(rng));
+            vec3 l_local = reflect(-v_local, h_local);
+            if (l_local.z <= 0.0) continue;
+            l = normalize(basis * l_local);
+            vec3 h = normalize(basis * h_local);
+            float n_dot_l = l_local.z;
+            float g2 = smith_visibility(n_dot_l, n_dot_v, alpha) * 4.0 * n_dot_l * n_dot_v;
+            weight = fresnel_schlick(f0, dot(v, h)) * g2 / ggx_g1(n_dot_v, alpha);
+        }
+        if (dot(l, ng) <= 0.0) continue;
+        Hit h = trace_closest(origin, l, 0.0, 1e6, RAY_MASK_ALL);
+        if (h.instance == NO_HIT) {
+            sum += weight * env_eval(l);
+        } else {
+            sum += weight * shade_hit(h, l, rng);
+            dist_sum += h.t;
+            hits += 1.0;
+        }
+    }
+    imageStore(out_radiance, px, vec4(sum / float(count), 1.0));
+    imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
+}

@@ -1,0 +1,40 @@
+//! gi: one bounce of diffuse global illumination with next-event estimation, demodulated by
+//! the diffuse albedo (shaders-glsl/gi.comp).
+
+use super::PassBuilder;
+use super::fullscreen::{FullscreenPass, Read};
+use crate::gpu::vk;
+use crate::graph::{OutputDesc, Preview};
+use anyhow::Result;
+
+pub const NAME: &str = "gi";
+/// Demodulated diffuse radiance: direct light from emitters and the environment, and indirect.
+pub const RADIANCE: &str = "gi.radiance";
+
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct GiSettings {
+    /// Scattering events after the primary surface (1: one bounce).
+    pub bounces: u32,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        Self { bounces: 1 }
+    }
+}
+
+pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32) -> Result<FullscreenPass> {
+    let inputs = [
+        "gbuffer.depth",
+        "gbuffer.normal",
+        "gbuffer.normal_geo",
+        "gbuffer.base_color",
+        "gbuffer.metal_rough",
+        "gbuffer.ids",
+    ]
+    .map(|n| (n.to_string(), Read::Texel))
+    .to_vec();
+    let outputs = vec![OutputDesc::storage(NAME, "radiance", vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    let push: Vec<u8> = [s.bounces.max(1), seed].iter().flat_map(|v| v.to_le_bytes()).collect();
+    FullscreenPass::new(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, push)
+}

@@ -1,0 +1,101 @@
+//! Ray-traced shadows of the first four punctual lights, after Ray Tracing Gems ch. 13
+//! (adaptive sampling): a chain of passes, one file and one shader each.
+//!
+//! `shadows` (trace, 4-frame visibility ring, sample counts) -> `shadows_penumbra` (dv, 5x5 max)
+//! -> `shadows_tent_h` -> `shadows_tent_v` (13x13 tent) -> `shadows_filter` (temporal mean and
+//! dv-scaled bilateral filter; dv_bar, kernel width, budget sum).
+//!
+//! Lights with a radius (sphere lights for points, disk lights for spots) are soft: adaptive
+//! sample counts 1..s_max, filtering, history. Lights without one are hard: one ray, no filter.
+//! The final visibility is `shadows_filter.visibility`, one channel per light.
+
+mod filter;
+mod penumbra;
+mod tent;
+mod trace;
+
+use super::PassBuilder;
+use super::history::Kept;
+use crate::gpu::vk;
+use crate::graph::{Pass, Preview};
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+/// The visibility the lighting reads: one channel per light (the first four).
+pub const VISIBILITY: &str = "shadows_filter.visibility";
+/// Lights beyond this many are shaded without shadows.
+pub const MAX_SHADOWED_LIGHTS: usize = 4;
+
+/// The named settings of the adaptive shadows.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct ShadowSettings {
+    /// Most rays per pixel and area light: 5 standard, 8 high (the chapter's tiers).
+    pub s_max: u32,
+    /// Penumbra threshold on dv_bar: above it the count grows, below it (after 4 stable frames)
+    /// it shrinks.
+    pub delta: f32,
+    /// dv_bar at which the spatial filter reaches its widest, 9x9 (the chapter's 0.4).
+    pub eta: f32,
+    /// Budget: when dv_bar summed over the image exceeds this fraction of the pixel count, s_max
+    /// is lowered in proportion for the next frame.
+    pub budget_fraction: f32,
+    /// Force 8x8 blocks rotating over 4 frames to be sampled (so every pixel is refreshed at
+    /// least every 4th frame even outside penumbrae).
+    pub forced_blocks: bool,
+}
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        Self { s_max: 5, delta: 0.02, eta: 0.4, budget_fraction: 0.25, forced_blocks: true }
+    }
+}
+
+/// The push-constant block of common/shadows_common.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    s_max: u32,
+    delta: f32,
+    eta: f32,
+    budget: f32,
+    forced_blocks: u32,
+    tent_axis: u32,
+}
+
+impl ShadowSettings {
+    fn push_constants(&self, pixels: u32, tent_axis: u32) -> Vec<u8> {
+        bytemuck::bytes_of(&Params {
+            s_max: self.s_max.max(1),
+            delta: self.delta,
+            eta: self.eta,
+            budget: self.budget_fraction * pixels as f32,
+            forced_blocks: self.forced_blocks as u32,
+            tent_axis,
+        })
+        .to_vec()
+    }
+}
+
+const RING: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+/// The chain's passes and what it keeps for the next frame.
+pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D) -> Result<(Vec<Box<dyn Pass>>, Vec<Kept>)> {
+    let pixels = extent.width * extent.height;
+    let passes: Vec<Box<dyn Pass>> = vec![
+        Box::new(trace::new(b, s.push_constants(pixels, 0))?),
+        Box::new(penumbra::new(b, s.push_constants(pixels, 0))?),
+        Box::new(tent::new(b, 0, s.push_constants(pixels, 0))?),
+        Box::new(tent::new(b, 1, s.push_constants(pixels, 1))?),
+        Box::new(filter::new(b, s.push_constants(pixels, 0))?),
+    ];
+    let kept = vec![
+        Kept::new("shadows.ring0", RING, Preview::Color),
+        Kept::new("shadows.ring1", RING, Preview::Color),
+        Kept::new("shadows.ring2", RING, Preview::Color),
+        Kept::new("shadows.sample_count", RING, Preview::Scalar),
+        Kept::new("shadows.stable", RING, Preview::Scalar),
+        Kept::new("shadows_filter.dv", RING, Preview::Scalar),
+        Kept::new("shadows_filter.budget", vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
+    ];
+    Ok((passes, kept))
+}

@@ -1,0 +1,173 @@
+//! Adaptive soft shadows (Ray Tracing Gems ch. 13) on builtin:soft-shadow-test, a box on a
+//! floor under a sphere light, against the true visibility integrated on the CPU:
+//! - the filtered visibility converges to it, closer than a single frame's raw estimate;
+//! - sample counts go up in the penumbra and down to 1 where nothing changes; a camera cut
+//!   puts every sampled pixel at s_max; a tight budget lowers the counts;
+//! - a hard light (builtin:shadow-test) stays at one ray and is not filtered.
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use hybrid_rt::gpu::ShaderLibrary;
+use hybrid_rt::passes::shadows::{ShadowSettings, VISIBILITY};
+use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::scene::builtin::{self, shadow_test_facts as facts};
+
+const W: u32 = 96;
+const H: u32 = 72;
+
+fn renderer(
+    ctx: &std::sync::Arc<hybrid_rt::gpu::Context>,
+    scene: hybrid_rt::scene::Scene,
+    shadows: ShadowSettings,
+) -> Renderer {
+    let settings = Settings { width: W, height: H, shadows, ..Default::default() };
+    Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, common::auto_backend(ctx))
+        .unwrap()
+}
+
+/// Fraction of the sphere light's solid angle seen from floor point p past the box, by a
+/// stratified grid of directions in the cone the sphere subtends (uniform in solid angle, as the
+/// shader samples it).
+fn true_visibility(p: Vec3) -> f32 {
+    let to = facts::SPHERE_LIGHT - p;
+    let d = to.length();
+    let axis = to / d;
+    let cos_max = (1.0 - (facts::SPHERE_RADIUS / d).powi(2)).sqrt();
+    let (t, b) = axis.any_orthonormal_pair();
+    let n = 48;
+    let mut visible = 0;
+    for i in 0..n {
+        for j in 0..n {
+            let (u, v) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+            let cos = 1.0 - u * (1.0 - cos_max);
+            let sin = (1.0 - cos * cos).max(0.0).sqrt();
+            let phi = std::f32::consts::TAU * v;
+            let dir = (t * phi.cos() * sin + b * phi.sin() * sin + axis * cos).normalize();
+            if !facts::ray_hits_box(p, dir, d) {
+                visible += 1;
+            }
+        }
+    }
+    visible as f32 / (n * n) as f32
+}
+
+/// Floor pixels (centre on the floor) with their floor point.
+fn floor_points(r: &Renderer, ids: &hybrid_rt::image_io::CpuImage) -> Vec<(u32, u32, Vec3)> {
+    let view = r.last_view.unwrap();
+    let size = Vec2::new(W as f32, H as f32);
+    let mut out = Vec::new();
+    for y in 0..H {
+        for x in 0..W {
+            if ids.get_u32(x, y, 0) != facts::FLOOR_INSTANCE {
+                continue;
+            }
+            let d = view.ray_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), size);
+            out.push((x, y, view.position + d * (-view.position.y / d.y)));
+        }
+    }
+    out
+}
+
+#[test]
+fn soft_shadows_converge_with_adaptive_counts() {
+    let ctx = common::validated_context();
+    let settings = ShadowSettings::default();
+    let mut r = renderer(&ctx, builtin::soft_shadow_test(), settings);
+    r.render_frame().unwrap();
+    let first = r.read_outputs(&["gbuffer.ids", "shadows.ring0", "shadows.sample_count"]).unwrap();
+    // Frame 1: nothing cached, so every lit floor pixel traced s_max rays.
+    let points = floor_points(&r, &first[0]);
+    for &(x, y, _) in &points {
+        let c = first[2].get(x, y, 0);
+        assert!(c == settings.s_max as f32, "first frame: count {c} at ({x},{y}), expected s_max");
+    }
+    // From s_max the count steps down by one after each 4 stable frames: 21 frames reach 1.
+    for _ in 0..25 {
+        r.render_frame().unwrap();
+    }
+    let imgs = r.read_outputs(&[VISIBILITY, "shadows.sample_count", "shadows.ring0"]).unwrap();
+    // Errors over the penumbra, where there is something to get wrong.
+    let (mut err_filtered, mut err_raw, mut n) = (0.0f64, 0.0f64, 0);
+    let (mut penumbra_counts, mut penumbra_px, mut open_ones, mut open_px) = (0.0f64, 0, 0, 0);
+    for &(x, y, p) in &points {
+        let truth = true_visibility(p);
+        if truth > 0.0 && truth < 1.0 {
+            err_filtered += (imgs[0].get(x, y, 0) - truth).abs() as f64;
+            err_raw += (imgs[2].get(x, y, 0) - truth).abs() as f64;
+            n += 1;
+        }
+        let count = imgs[1].get(x, y, 0);
+        assert!((1.0..=settings.s_max as f32).contains(&count), "count {count} at ({x},{y})");
+        if truth > 0.2 && truth < 0.8 {
+            penumbra_counts += count as f64;
+            penumbra_px += 1;
+        } else if truth == 1.0 {
+            open_px += 1;
+            if count == 1.0 {
+                open_ones += 1;
+            }
+        }
+    }
+    let (mae, mae_raw) = (err_filtered / n as f64, err_raw / n as f64);
+    eprintln!("penumbra visibility MAE: filtered {mae:.4}, this frame's raw rays {mae_raw:.4} ({n} pixels)");
+    assert!(n > 100, "only {n} penumbra pixels");
+    assert!(mae < 0.05, "filtered visibility is off the true visibility by {mae} on average in the penumbra");
+    assert!(mae < 0.7 * mae_raw, "history and filtering did not help: {mae} vs raw {mae_raw}");
+    let mean_penumbra = penumbra_counts / penumbra_px.max(1) as f64;
+    assert!(penumbra_px > 50 && mean_penumbra > 2.5, "penumbra: {penumbra_px} pixels, mean count {mean_penumbra}");
+    assert!(
+        open_ones as f64 > 0.8 * open_px as f64,
+        "only {open_ones} of {open_px} unshadowed pixels came down to 1 ray"
+    );
+
+    // A camera cut invalidates every cache: all sampled pixels go to s_max.
+    r.camera_cut();
+    r.render_frame().unwrap();
+    let counts = r.read_output("shadows.sample_count").unwrap();
+    for &(x, y, _) in &points {
+        assert_eq!(counts.get(x, y, 0), settings.s_max as f32, "after the cut at ({x},{y})");
+    }
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn a_tight_budget_lowers_the_counts() {
+    let ctx = common::validated_context();
+    let tight = ShadowSettings { budget_fraction: 0.002, ..Default::default() };
+    let mut r = renderer(&ctx, builtin::soft_shadow_test(), tight);
+    for _ in 0..4 {
+        r.render_frame().unwrap();
+    }
+    let counts = r.read_output("shadows.sample_count").unwrap();
+    let max = (0..W * H).map(|i| counts.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
+    assert!(max < tight.s_max as f32, "the budget did not cap the counts (max {max})");
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn hard_lights_use_one_ray_and_no_filter() {
+    let ctx = common::validated_context();
+    let mut r = renderer(&ctx, builtin::shadow_test(), ShadowSettings::default());
+    for _ in 0..3 {
+        r.render_frame().unwrap();
+    }
+    let imgs = r
+        .read_outputs(&["gbuffer.ids", "shadows.sample_count", "shadows_filter.kernel", "shadows.ring0", VISIBILITY])
+        .unwrap();
+    for y in 0..H {
+        for x in 0..W {
+            if imgs[0].get_u32(x, y, 0) == u32::MAX {
+                continue;
+            }
+            let c = imgs[1].get(x, y, 0);
+            assert!(c == 1.0 || c == 0.0, "hard light: count {c} at ({x},{y})");
+            assert_eq!(imgs[2].get(x, y, 0), 1.0, "hard light filtered at ({x},{y})");
+            assert_eq!(imgs[3].get(x, y, 0), imgs[4].get(x, y, 0), "hard light visibility changed by the filter");
+        }
+    }
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
