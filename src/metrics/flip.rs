@@ -40,20 +40,23 @@
 //! exposure infinite); an all-black reference uses the single exposure 0 (twice).
 //!
 //! # Checked against
-//! The unit tests compare this implementation with NVIDIA's own (the C++ code in the
-//! `flip-evaluator` 1.7 Python package) on generated images: LDR and HDR means agree to within
-//! 1e-5 (see `tests::matches_nvidia_*`). NVIDIA's published reference pair
-//! (images/reference.{png,exr} and test, expected LDR mean 0.159691 and HDR mean 0.283478 with
-//! exposures −12.5423 … 0.9427, 14 steps) was not available offline; `tests/metrics.rs` has an
-//! ignored test that checks those numbers when the images are supplied.
+//! The unit tests compare this implementation with NVIDIA's own (their C++ FLIP, as shipped in
+//! the `flip-evaluator` 1.7 Python package) on generated 97x64 images: three LDR cases (noise,
+//! a blue-only change, a one-pixel shift at 30 ppd with linear input) and two HDR cases
+//! (automatic exposures, and given ones). The means agree to within 5e-7, single pixels (corners
+//! included) to within 4e-6, and the automatic exposure range to within 1e-6. NVIDIA's
+//! published reference pair (images/reference.{png,exr} and test.{png,exr} in their repository,
+//! expected LDR mean 0.159691 and HDR mean 0.283478 with exposures −12.5423 … 0.9427 in 14
+//! steps) was not available offline; `tests/metrics.rs` has an ignored test that checks those
+//! numbers when the images are supplied.
 
-use super::{ACES, MetricError, Result, aces, convolve_columns, convolve_rows, rgb_pair, srgb_decode};
+use super::{ACES, MetricError, Planes, Result, aces, convolve_columns, convolve_rows, rgb_pair, srgb_decode};
 use crate::image_io::CpuImage;
 use std::f32::consts::PI;
 
 /// Pixels per degree of the FLIP papers' default viewer: 0.7 m from a 0.7 m wide 3840-pixel
 /// monitor (= [`pixels_per_degree`]`(0.7, 3840.0, 0.7)`).
-pub const DEFAULT_PPD: f32 = 67.020_64;
+pub const DEFAULT_PPD: f32 = 67.020_645;
 
 /// Pixels per degree of visual angle for a viewer `distance_m` from a monitor `width_m` wide
 /// showing `width_px` pixels across (small-angle approximation, as FLIP defines it).
@@ -117,7 +120,7 @@ pub fn ldr_flip(
     let (r, t) = rgb_pair(reference, test)?;
     let (w, h) = (reference.width as usize, reference.height as usize);
     let filters = Filters::new(ppd)?;
-    let to_linear = |planes: [Vec<f32>; 3]| {
+    let to_linear = |planes: Planes| {
         planes.map(|p| {
             p.into_iter()
                 .map(|v| match input {
@@ -136,7 +139,7 @@ pub fn hdr_flip(reference: &CpuImage, test: &CpuImage, options: &HdrFlipOptions)
     let (r, t) = rgb_pair(reference, test)?;
     let (w, h) = (reference.width as usize, reference.height as usize);
     let filters = Filters::new(options.ppd)?;
-    let clamp = |planes: [Vec<f32>; 3]| planes.map(|p| p.into_iter().map(|v| v.max(0.0)).collect::<Vec<f32>>());
+    let clamp = |planes: Planes| planes.map(|p| p.into_iter().map(|v| v.max(0.0)).collect::<Vec<f32>>());
     let (r, t) = (clamp(r), clamp(t));
     let exposures = exposure_range(&r, options)?;
     let step =
@@ -144,9 +147,8 @@ pub fn hdr_flip(reference: &CpuImage, test: &CpuImage, options: &HdrFlipOptions)
     let mut map = vec![0.0f32; w * h];
     for i in 0..exposures.count {
         let scale = (exposures.start + i as f32 * step).exp2();
-        let expose = |planes: &[Vec<f32>; 3]| {
-            [0, 1, 2].map(|c| planes[c].iter().map(|&v| aces(v * scale)).collect::<Vec<f32>>())
-        };
+        let expose =
+            |planes: &Planes| [0, 1, 2].map(|c| planes[c].iter().map(|&v| aces(v * scale)).collect::<Vec<f32>>());
         let ldr = ldr_map(&expose(&r), &expose(&t), w, h, &filters);
         for (m, v) in map.iter_mut().zip(ldr) {
             *m = m.max(v);
@@ -160,7 +162,7 @@ fn mean(map: &[f32]) -> f64 {
 }
 
 /// The exposures to evaluate: the options' where given, else from the reference's luminance.
-fn exposure_range(reference: &[Vec<f32>; 3], options: &HdrFlipOptions) -> Result<Exposures> {
+fn exposure_range(reference: &Planes, options: &HdrFlipOptions) -> Result<Exposures> {
     let auto = || {
         let mut lum: Vec<f32> = (0..reference[0].len())
             .map(|i| super::luminance(reference[0][i], reference[1][i], reference[2][i]))
@@ -274,14 +276,14 @@ fn balance(k: Vec<f32>) -> Vec<f32> {
 /// What FLIP compares of one image: Hunt-adjusted CIELAB after the CSF filters, and the edge and
 /// point feature magnitudes.
 struct Perceived {
-    lab: [Vec<f32>; 3],
+    lab: Planes,
     edge: Vec<f32>,
     point: Vec<f32>,
 }
 
 /// The LDR-FLIP error map of two linear RGB images in [0, 1]. The two images are prepared on
 /// two threads: they are independent until the final per-pixel comparison.
-fn ldr_map(reference: &[Vec<f32>; 3], test: &[Vec<f32>; 3], w: usize, h: usize, f: &Filters) -> Vec<f32> {
+fn ldr_map(reference: &Planes, test: &Planes, w: usize, h: usize, f: &Filters) -> Vec<f32> {
     let (r, t) = std::thread::scope(|s| {
         let r = s.spawn(|| perceive(reference, w, h, f));
         let t = perceive(test, w, h, f);
@@ -307,7 +309,7 @@ const P_C: f32 = 0.4;
 const P_T: f32 = 0.95;
 const Q_F: f32 = 0.5;
 
-fn perceive(rgb: &[Vec<f32>; 3], w: usize, h: usize, f: &Filters) -> Perceived {
+fn perceive(rgb: &Planes, w: usize, h: usize, f: &Filters) -> Perceived {
     let n = w * h;
     let mut ycxcz = [vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]];
     for i in 0..n {
@@ -332,6 +334,7 @@ fn perceive(rgb: &[Vec<f32>; 3], w: usize, h: usize, f: &Filters) -> Perceived {
     };
     let edge = magnitude(&rows_d, &rows_g, &f.edge, &mut a, &mut b);
     let point = magnitude(&rows_p, &rows_g, &f.point, &mut a, &mut b);
+    // Free three planes before the colour pipeline allocates its own (8 MB each at 1080p).
     drop((rows_g, rows_d, rows_p));
 
     // Colour pipeline: CSF filtering in YCxCz, back to clamped linear RGB, then Hunt-adjusted Lab.
@@ -355,7 +358,7 @@ fn perceive(rgb: &[Vec<f32>; 3], w: usize, h: usize, f: &Filters) -> Perceived {
 /// The D65 white of XYZ, which YCxCz and CIELAB are relative to.
 const WHITE: [f32; 3] = [0.950_428_5, 1.0, 1.088_900_4];
 
-/// Linear sRGB to CIE XYZ (D65), the exact rational matrix of the sRGB primaries.
+/// Linear sRGB to CIE XYZ (D65), with the rational matrix of the sRGB primaries that FLIP uses.
 fn rgb_to_xyz([r, g, b]: [f32; 3]) -> [f32; 3] {
     [
         (10_135_552.0 * r + 8_788_810.0 * g + 4_435_075.0 * b) / 24_577_794.0,

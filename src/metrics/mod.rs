@@ -19,8 +19,8 @@
 //! # Which metric on which values
 //! | metric | values it compares |
 //! | --- | --- |
-//! | [`mse`], [`rmse`], [`rel_mse`], [`psnr`] | linear HDR values as given |
-//! | [`psnr_display`], [`ssim`], [`ssim_with`] | display-encoded values in [0, 1] after a [`DisplayTransform`] |
+//! | [`mse`], [`rmse`], [`rel_mse`], [`psnr()`] | linear HDR values as given |
+//! | [`psnr_display`], [`ssim()`], [`ssim_with`] | display-encoded values in [0, 1] after a [`DisplayTransform`] |
 //! | [`ldr_flip`] | LDR values in [0, 1], sRGB-encoded or linear ([`LdrInput`]) |
 //! | [`hdr_flip`] | linear HDR values, tonemapped by HDR-FLIP itself at several exposures |
 //! | [`flicker`], [`ghosting`], [`lag`] | linear luminance per pixel |
@@ -65,7 +65,7 @@ pub fn luminance(r: f32, g: f32, b: f32) -> f32 {
 }
 
 /// How linear values are turned into display-encoded values in [0, 1] for the metrics that
-/// compare what a viewer sees ([`ssim`], [`psnr_display`]).
+/// compare what a viewer sees ([`ssim()`], [`psnr_display`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum DisplayTransform {
     /// The values already are display-encoded (e.g. a tonemapped 8-bit read-back): only clamped to [0, 1].
@@ -210,8 +210,11 @@ fn checked_texels<'a>(img: &'a CpuImage, what: &str) -> Result<&'a [f32]> {
     Ok(values)
 }
 
-/// Linear RGB of a checked image as three planes (R, G, B), each `width * height` long.
-pub(crate) fn rgb_planes(img: &CpuImage, what: &str) -> Result<[Vec<f32>; 3]> {
+/// An image as three planes (R, G, B or another three-channel space), each `width * height` long.
+pub(crate) type Planes = [Vec<f32>; 3];
+
+/// Linear RGB of a checked image as planes.
+pub(crate) fn rgb_planes(img: &CpuImage, what: &str) -> Result<Planes> {
     let values = checked_texels(img, what)?;
     let plane = |c: usize| values.chunks_exact(img.channels).map(|px| px[c]).collect();
     Ok([plane(0), plane(1), plane(2)])
@@ -224,7 +227,7 @@ pub(crate) fn luminance_plane(img: &CpuImage, what: &str) -> Result<Vec<f32>> {
 }
 
 /// Checks a reference/test pair and returns both as RGB planes.
-pub(crate) fn rgb_pair(reference: &CpuImage, test: &CpuImage) -> Result<([Vec<f32>; 3], [Vec<f32>; 3])> {
+pub(crate) fn rgb_pair(reference: &CpuImage, test: &CpuImage) -> Result<(Planes, Planes)> {
     let r = rgb_planes(reference, "reference")?;
     check_dims("test", (reference.width, reference.height), (test.width, test.height))?;
     Ok((r, rgb_planes(test, "test")?))
@@ -278,7 +281,7 @@ pub(crate) fn convolve_rows<T: Sample>(src: &[T], width: usize, k: &[T], dst: &m
             }
             out.copy_from_slice(&acc);
         }
-        let done = width - blocks.len();
+        let done = width - width % BLOCK;
         for (x, o) in blocks.into_remainder().iter_mut().enumerate() {
             *o = padded[done + x..].iter().zip(k).map(|(&v, &w)| v * w).sum();
         }
@@ -373,29 +376,33 @@ mod tests {
         // Only the RGB channels are read, so a NaN in alpha is no error.
         let mut img = grey_image(2, 2, |_, _| 0.25);
         img.channels = 4;
-        img.texels = Texels::F32(vec![0.25, 0.25, 0.25, f32::NAN].repeat(4));
+        img.texels = Texels::F32([0.25, 0.25, 0.25, f32::NAN].repeat(4));
         assert_eq!(luminance_plane(&img, "x").unwrap(), vec![0.25; 4]);
     }
 
     #[test]
     fn separable_convolution_matches_direct_sum() {
-        let (w, h) = (7, 5);
-        let src: Vec<f32> = (0..w * h).map(|i| unit(i as u32)).collect();
-        let kx = [0.25, 0.5, 0.25];
+        // Widths below, at and beyond the 8-pixel blocks of the row pass, and kernels wider
+        // than the image (all taps clamp).
+        let kx = [0.05, 0.15, 0.25, 0.3, 0.25];
         let ky = [0.1, 0.2, 0.4, 0.2, 0.1];
-        let (mut tmp, mut dst) = (Vec::new(), Vec::new());
-        convolve_separable(&src, w, h, &kx, &ky, &mut tmp, &mut dst);
-        for y in 0..h {
-            for x in 0..w {
-                let mut want = 0.0;
-                for (j, wy) in ky.iter().enumerate() {
-                    for (i, wx) in kx.iter().enumerate() {
-                        let sx = (x as i64 + i as i64 - 1).clamp(0, w as i64 - 1) as usize;
-                        let sy = (y as i64 + j as i64 - 2).clamp(0, h as i64 - 1) as usize;
-                        want += wx * wy * src[sy * w + sx];
+        for (w, h) in [(7usize, 5usize), (8, 3), (19, 6), (2, 1)] {
+            let src: Vec<f32> = (0..w * h).map(|i| unit(i as u32)).collect();
+            let (mut tmp, mut dst) = (Vec::new(), Vec::new());
+            convolve_separable(&src, w, h, &kx, &ky, &mut tmp, &mut dst);
+            for y in 0..h {
+                for x in 0..w {
+                    let mut want = 0.0;
+                    for (j, wy) in ky.iter().enumerate() {
+                        for (i, wx) in kx.iter().enumerate() {
+                            let sx = (x as i64 + i as i64 - 2).clamp(0, w as i64 - 1) as usize;
+                            let sy = (y as i64 + j as i64 - 2).clamp(0, h as i64 - 1) as usize;
+                            want += wx * wy * src[sy * w + sx];
+                        }
                     }
+                    let got = dst[y * w + x];
+                    assert!((got - want).abs() < 1e-6, "{w}x{h} at ({x}, {y}): {got} vs {want}");
                 }
-                assert!((dst[y * w + x] - want).abs() < 1e-6, "({x}, {y}): {} vs {want}", dst[y * w + x]);
             }
         }
     }

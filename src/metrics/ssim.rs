@@ -12,7 +12,7 @@
 //! that lie fully inside the image (the reference implementation's "valid" region), so images
 //! must be at least 11x11. There is no down-sampling step.
 
-use super::{DisplayTransform, MetricError, Result, convolve_columns, convolve_rows, rgb_pair};
+use super::{DisplayTransform, MetricError, Planes, Result, convolve_columns, convolve_rows, rgb_pair};
 use crate::image_io::CpuImage;
 
 const WINDOW_RADIUS: usize = 5;
@@ -37,7 +37,7 @@ pub fn ssim_with(reference: &CpuImage, test: &CpuImage, transform: DisplayTransf
     }
     // f64 from here on: the variances are differences of nearly equal moments, and f32 would
     // leave errors of ~1e-7 in them, comparable to C2 in flat regions.
-    let luma = |p: &[Vec<f32>; 3]| -> Vec<f64> {
+    let luma = |p: &Planes| -> Vec<f64> {
         (0..w * h)
             .map(|i| {
                 super::luminance(transform.apply(p[0][i]), transform.apply(p[1][i]), transform.apply(p[2][i])) as f64

@@ -255,7 +255,7 @@ mod tests {
         // 0.5^t <= 0.1 first at t = 4 (0.0625); 0.5^3 = 0.125 is still above.
         assert_eq!(r.frames_to_clear, Some(4));
         // A ghost that never fades below a hundredth within 5 frames.
-        assert_eq!(ghosting(&frames[..5], &bg, &[trail.clone()], 0.01).unwrap().frames_to_clear, None);
+        assert_eq!(ghosting(&frames[..5], &bg, std::slice::from_ref(&trail), 0.01).unwrap().frames_to_clear, None);
         assert!(ghosting(&frames, &bg, &[trail.clone(), trail], 0.1).is_err());
     }
 
