@@ -18,8 +18,8 @@
 mod common;
 
 use hybrid_rt::gpu::{
-    Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSetLayout, MemoryLocation, Pipeline, PushResource,
-    Recorder, ShaderLibrary, vk,
+    Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, MemoryLocation, Pipeline,
+    PushResource, Recorder, ShaderLibrary, vk,
 };
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -47,18 +47,37 @@ struct Harness {
     pool: CommandPool,
     pipeline: Pipeline,
     _layouts: [DescriptorSetLayout; 2],
+    /// Set 0 holds only the BRDF's energy table (binding 17), as in the scene set.
+    energy_set: DescriptorSet,
+    _energy: Buffer,
 }
 
 impl Harness {
     fn new(ctx: &Arc<Context>) -> Self {
         let b = |binding| Binding { binding, kind: BindingKind::StorageBuffer, count: 1 };
-        // The harness reads no scene: set 0 is empty, set 1 holds its two buffers.
-        let empty = DescriptorSetLayout::new(ctx, &[], false).unwrap();
+        // The harness reads no scene: set 0 holds only the BRDF's table, set 1 its two buffers.
+        let scene = DescriptorSetLayout::new(ctx, &[b(17)], false).unwrap();
         let set = DescriptorSetLayout::new(ctx, &[b(0), b(1)], true).unwrap();
         let spirv = ShaderLibrary::embedded().get("brdf_test.comp").unwrap();
         let pipeline =
-            Pipeline::compute(ctx, "brdf_test", &spirv, &[&empty, &set], size_of::<Params>() as u32).unwrap();
-        Self { ctx: ctx.clone(), pool: CommandPool::new(ctx).unwrap(), pipeline, _layouts: [empty, set] }
+            Pipeline::compute(ctx, "brdf_test", &spirv, &[&scene, &set], size_of::<Params>() as u32).unwrap();
+        let energy = Buffer::with_data(
+            ctx,
+            "brdf_energy",
+            bytemuck::cast_slice(hybrid_rt::render::brdf::energy_table()),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )
+        .unwrap();
+        let energy_set = DescriptorSet::new(ctx, &scene).unwrap();
+        energy_set.write_buffer(17, BindingKind::StorageBuffer, &energy);
+        Self {
+            ctx: ctx.clone(),
+            pool: CommandPool::new(ctx).unwrap(),
+            pipeline,
+            _layouts: [scene, set],
+            energy_set,
+            _energy: energy,
+        }
     }
 
     /// Runs `params.count` items; returns two vec4 records per item.
@@ -72,6 +91,7 @@ impl Harness {
             .run(|cmd| {
                 let rec = Recorder::new(&self.ctx, cmd);
                 rec.bind_pipeline(&self.pipeline);
+                rec.bind_scene_set(&self.pipeline, self.energy_set.raw);
                 rec.push_set(
                     &self.pipeline,
                     &[PushResource::StorageBuffer(input.raw), PushResource::StorageBuffer(output.raw)],

@@ -1,11 +1,22 @@
 // The one material model: glTF metallic-roughness as Lambert diffuse plus a GGX specular lobe
 // with height-correlated Smith visibility and Schlick Fresnel. Every pass and the reference
 // path tracer evaluate light through these functions.
+//
+// The lobes are coupled through the specular lobe's directional albedo E (src/render/brdf.rs,
+// which computes the table and mirrors this file on the CPU): the diffuse lobe is weighted by
+// (1 - E(v)) (1 - E(l)) / (1 - E_avg), reciprocal and energy-conserving, where the common
+// 1 - F(v.h) weighting reflects more than 1 at grazing angles.
 #ifndef BRDF_GLSL
 #define BRDF_GLSL
 
+#extension GL_EXT_scalar_block_layout : require
 #include "sampling.glsl"
 #include "color.glsl"
+
+// (A, B) with E(mu, roughness; F0) = F0 A + B over a 32 x 32 grid (roughness rows of view
+// cosines), then 32 cosine-weighted averages per roughness.
+#define BRDF_TABLE_SIZE 32
+layout(set = 0, binding = 17, scalar) readonly buffer BrdfEnergy { vec2 brdf_energy[]; };
 
 // Roughness below this is treated as this (a perfect mirror has no finite GGX density).
 #define MIN_ALPHA 1e-3
@@ -40,6 +51,34 @@ struct BrdfInput {
 vec3 brdf_f0(BrdfInput m) { return mix(vec3(0.04), m.base_color, m.metallic); }
 vec3 brdf_diffuse_albedo(BrdfInput m) { return m.base_color * (1.0 - m.metallic); }
 
+// Bilinear (A, B) at view cosine mu and roughness.
+vec2 brdf_energy_ab(float mu, float roughness) {
+    float x = clamp(mu, 0.0, 1.0) * float(BRDF_TABLE_SIZE - 1);
+    float y = clamp(roughness, 0.0, 1.0) * float(BRDF_TABLE_SIZE - 1);
+    int i = min(int(x), BRDF_TABLE_SIZE - 2);
+    int j = min(int(y), BRDF_TABLE_SIZE - 2);
+    vec2 t = vec2(x - float(i), y - float(j));
+    int row0 = j * BRDF_TABLE_SIZE, row1 = row0 + BRDF_TABLE_SIZE;
+    vec2 top = mix(brdf_energy[row0 + i], brdf_energy[row0 + i + 1], t.x);
+    vec2 bottom = mix(brdf_energy[row1 + i], brdf_energy[row1 + i + 1], t.x);
+    return mix(top, bottom, t.y);
+}
+
+// The specular lobe's directional albedo for a view at cosine mu.
+vec3 brdf_specular_albedo(BrdfInput m, float mu) {
+    vec2 ab = brdf_energy_ab(mu, m.roughness);
+    return brdf_f0(m) * ab.x + ab.y;
+}
+
+// Its cosine-weighted average over all views.
+vec3 brdf_specular_albedo_avg(BrdfInput m) {
+    float y = clamp(m.roughness, 0.0, 1.0) * float(BRDF_TABLE_SIZE - 1);
+    int j = min(int(y), BRDF_TABLE_SIZE - 2);
+    int base = BRDF_TABLE_SIZE * BRDF_TABLE_SIZE;
+    vec2 ab = mix(brdf_energy[base + j], brdf_energy[base + j + 1], y - float(j));
+    return brdf_f0(m) * ab.x + ab.y;
+}
+
 // f(v, l) * cos(theta_l); n, v, l unit vectors, v and l pointing away from the surface.
 vec3 brdf_eval_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
     float n_dot_l = dot(n, l);
@@ -49,7 +88,9 @@ vec3 brdf_eval_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
     float alpha = ggx_alpha(m.roughness);
     vec3 f = fresnel_schlick(brdf_f0(m), dot(v, h));
     vec3 spec = f * ggx_d(max(dot(n, h), 0.0), alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
-    vec3 diff = (1.0 - f) * brdf_diffuse_albedo(m) * INV_PI;
+    vec3 coupling = (1.0 - brdf_specular_albedo(m, n_dot_v)) * (1.0 - brdf_specular_albedo(m, n_dot_l)) /
+                    max(1.0 - brdf_specular_albedo_avg(m), vec3(1e-4));
+    vec3 diff = brdf_diffuse_albedo(m) * INV_PI * coupling;
     return (diff + spec) * n_dot_l;
 }
 

@@ -1,6 +1,7 @@
 //! The renderer: a scene on the GPU, the frame graph of passes, and the per-frame loop that
 //! advances animation, updates the camera and records, submits and times one frame.
 
+pub mod brdf;
 pub mod camera;
 pub mod environment;
 pub mod frame;

@@ -35,6 +35,8 @@ pub mod binding {
     pub const EMITTER_BASE: u32 = 14;
     pub const ENV_TEXELS: u32 = 15;
     pub const ENV_CDF: u32 = 16;
+    /// The specular directional-albedo table that couples the BRDF's lobes (src/render/brdf.rs).
+    pub const BRDF_ENERGY: u32 = 17;
 }
 
 #[repr(C)]
@@ -143,6 +145,7 @@ pub struct SceneGpu {
     pub set: DescriptorSet,
     pub accel: Box<dyn RayAccel>,
     pub light_tables: LightTables,
+    _brdf_energy: Buffer,
     prev_world: Option<Vec<Mat4>>,
 }
 
@@ -228,6 +231,13 @@ impl SceneGpu {
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
         let light_tables = LightTables::new(ctx, pool, scene, pose, environment)?;
+        let brdf_energy = gpu::upload::device_buffer(
+            ctx,
+            pool,
+            "brdf_energy",
+            bytemuck::cast_slice(super::brdf::energy_table()),
+            storage,
+        )?;
         let set_layout = DescriptorSetLayout::new(ctx, &bindings, false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;
         set.write_buffer(binding::FRAME, BindingKind::UniformBuffer, &frame);
@@ -240,6 +250,7 @@ impl SceneGpu {
         set.write_sampled_images(binding::TEXTURES, &texture_bindings);
         accel.write_set(&set);
         light_tables.write_set(&set);
+        set.write_buffer(binding::BRDF_ENERGY, BindingKind::StorageBuffer, &brdf_energy);
 
         let mut gpu = Self {
             vertices,
@@ -257,6 +268,7 @@ impl SceneGpu {
             set,
             accel,
             light_tables,
+            _brdf_energy: brdf_energy,
             prev_world: None,
         };
         gpu.update_pose(scene, pose)?;
@@ -309,6 +321,7 @@ fn scene_bindings(texture_count: u32) -> Vec<Binding> {
         b(binding::MATERIALS, BindingKind::StorageBuffer),
         b(binding::LIGHTS, BindingKind::StorageBuffer),
         Binding { binding: binding::TEXTURES, kind: BindingKind::SampledImage, count: texture_count },
+        b(binding::BRDF_ENERGY, BindingKind::StorageBuffer),
     ]
 }
 
