@@ -1,6 +1,8 @@
 #version 460
-// gi: diffuse global illumination, demodulated (divided by the diffuse albedo) so the denoiser
-// keeps texture detail: per pixel one cosine-sampled bounce plus one light sample.
+// gi: diffuse global illumination, demodulated so the denoiser keeps texture detail: per pixel
+// one cosine-sampled bounce plus one light sample. The output is the diffuse lobe's integral
+// without its view-side factors, (1/pi) int L (1 - E(l)) cos: composite multiplies by the
+// albedo and (1 - E(v)) / (1 - E_avg), which makes it exactly the BRDF's diffuse lobe.
 //
 // What it covers, so that nothing is counted twice (see composite.comp):
 // - direct light on the diffuse lobe from emissive triangles and the environment: a light
@@ -43,7 +45,7 @@ vec3 outgoing(HitSurface s, vec3 dir, uint bounces_left, inout Rng rng) {
         BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
         vec3 v = -dir;
         vec3 leave = offset_ray(s.position, s.normal_geo);
-        NeeSample ls = light_sample(s.position, rng_next3(rng));
+        NeeSample ls = light_sample(leave, rng_next3(rng));
         if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) {
             vec3 f = brdf_eval_cos(m, s.normal, v, ls.dir);
             if (dot(f, f) > 0.0 && !trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
@@ -72,6 +74,8 @@ void main() {
         imageStore(out_radiance, px, vec4(0.0));
         return;
     }
+    vec4 mr = imageLoad(g_metal_rough, px);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
     float depth = imageLoad(g_depth, px).r;
     vec3 n = imageLoad(g_normal, px).xyz;
@@ -82,12 +86,15 @@ void main() {
     // its albedo.
     vec3 l_sum = vec3(0.0);
 
-    // Direct light from emitters and the environment, light-sampled.
-    NeeSample ls = light_sample(p, rng_next3(rng));
+    // Direct light from emitters and the environment, light-sampled. Sampled from the shadow
+    // ray's own origin: direction and distance measured from the surface point would overshoot
+    // by the offset, and the shadow ray would hit the emitter it aims at.
+    NeeSample ls = light_sample(origin, rng_next3(rng));
     if (ls.pdf > 0.0 && dot(ls.dir, ng) > 0.0) {
         float cos_l = max(dot(n, ls.dir), 0.0);
         if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
-            l_sum += ls.weight * cos_l * INV_PI * mis_power(ls.pdf, cos_l * INV_PI);
+            l_sum += ls.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l)) *
+                     mis_power(ls.pdf, cos_l * INV_PI);
         }
     }
 
@@ -95,18 +102,21 @@ void main() {
     vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
     float pdf = max(dot(n, dir), 0.0) * INV_PI;
     if (dot(dir, ng) > 0.0 && pdf > 0.0) {
+        vec3 lobe = 1.0 - brdf_specular_albedo(m, dot(n, dir));
+        vec3 bounce = vec3(0.0);
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
         if (h.instance == NO_HIT) {
-            l_sum += env_eval(dir) * mis_power(pdf, light_pdf_environment(dir));
+            bounce = env_eval(dir) * mis_power(pdf, light_pdf_environment(dir));
         } else {
             HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
             if (emitter_visible_side(h.instance, h.primitive, dir)) {
                 float lp = light_pdf_emitter(h.instance, h.primitive, origin, s.position);
-                l_sum += s.mat.emissive * mis_power(pdf, lp);
+                bounce += s.mat.emissive * mis_power(pdf, lp);
             }
-            l_sum += outgoing(s, dir, max(params.bounces, 1u), rng);
+            bounce += outgoing(s, dir, max(params.bounces, 1u), rng);
         }
+        l_sum += lobe * bounce;
     }
     imageStore(out_radiance, px, vec4(l_sum, 1.0));
 }

@@ -72,7 +72,7 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
         vec3 leave = offset_ray(s.position, ng);
 
         // Next-event estimation. Directions below the geometric surface would start inside it.
-        NeeSample ls = light_sample(s.position, rng_next3(rng));
+        NeeSample ls = light_sample(leave, rng_next3(rng));
         if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0) {
             vec3 f = brdf_eval_cos(m, n, v, ls.dir);
             if (dot(f, f) > 0.0) {

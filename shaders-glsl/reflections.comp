@@ -38,10 +38,10 @@ vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
     HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
     vec3 radiance = emitter_visible_side(h.instance, h.primitive, dir) ? s.mat.emissive : vec3(0.0);
     BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
-    NeeSample ls = light_sample(s.position, rng_next3(rng));
+    vec3 leave = offset_ray(s.position, s.normal_geo);
+    NeeSample ls = light_sample(leave, rng_next3(rng));
     if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) {
         vec3 f = brdf_eval_cos(m, s.normal, -dir, ls.dir);
-        vec3 leave = offset_ray(s.position, s.normal_geo);
         if (dot(f, f) > 0.0 && !trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
             radiance += f * ls.weight;
         }

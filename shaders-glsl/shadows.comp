@@ -48,17 +48,21 @@ const uint FORCED[16] = uint[16](0u, 3u, 2u, 1u, 2u, 1u, 0u, 3u, 0u, 3u, 2u, 1u,
 // Low-discrepancy point n of the R2 sequence (Roberts 2018).
 vec2 r2(uint n) { return fract(vec2(0.5) + float(n) * vec2(0.7548776662, 0.5698402910)); }
 
-// Fraction of `count` shadow rays toward points of light i that reach it.
-float trace_visibility(uint i, vec3 p, vec3 origin, ivec2 px, uint count) {
+// Fraction of the shadow rays toward `count` points of light i that reach it. Points that send
+// no light here (the back of a disk, outside a spot's cone) say nothing about occlusion and are
+// left out; with none left the light is unoccluded by definition (it sends nothing anyway).
+float trace_visibility(uint i, vec3 origin, ivec2 px, uint count) {
     uint set = ((frame.frame_index & 3u) * 9u + uint(px.y % 3) * 3u + uint(px.x % 3)) * count;
-    float visible = 0.0;
+    float visible = 0.0, tried = 0.0;
     for (uint k = 0u; k < count; ++k) {
-        NeeSample s = sample_punctual_light(i, p, r2(set + k), 1.0);
+        // Sampled from the ray's origin, so direction and length are the ray's own.
+        NeeSample s = sample_punctual_light(i, origin, r2(set + k), 1.0);
         if (dot(s.weight, s.weight) == 0.0) continue;
+        tried += 1.0;
         float tmax = s.dist >= LIGHT_FAR ? 1e30 : s.dist * (1.0 - 1e-4);
         if (!trace_any(origin, s.dir, 0.0, tmax, RAY_MASK_ALL)) visible += 1.0;
     }
-    return visible / float(count);
+    return tried > 0.0 ? visible / tried : 1.0;
 }
 
 void main() {
@@ -109,7 +113,7 @@ void main() {
             continue;
         }
         if (!soft[i]) {
-            vis[i] = trace_visibility(i, p, origin, px, 1u);
+            vis[i] = trace_visibility(i, origin, px, 1u);
             state[i] = 1.0;
             continue;
         }
@@ -131,7 +135,7 @@ void main() {
         state[i] = s;
         bool sample_now = !reprojected || dv[i] > sp.delta || forced;
         if (sample_now) {
-            vis[i] = trace_visibility(i, p, origin, px, uint(s));
+            vis[i] = trace_visibility(i, origin, px, uint(s));
         } else {
             vis[i] = r0[i];
         }
