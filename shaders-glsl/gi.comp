@@ -4,6 +4,11 @@
 // without its view-side factors, (1/pi) int L (1 - E(l)) cos: composite multiplies by the
 // albedo and (1 - E(v)) / (1 - E_avg), which makes it exactly the BRDF's diffuse lobe.
 //
+// On surfaces rougher than the reflection cut-off, where the reflections pass traces no rays,
+// the same samples also estimate the specular lobe (gi.specular, not demodulated): a broad
+// lobe is well served by cosine-weighted directions, and without it a rough dielectric would
+// lose the few percent of light its specular lobe reflects.
+//
 // What it covers, so that nothing is counted twice (see composite.comp):
 // - direct light on the diffuse lobe from emissive triangles and the environment: a light
 //   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
@@ -28,10 +33,12 @@ layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_specular;
 
 layout(push_constant) uniform Params {
-    uint bounces;  // scattering events after the primary surface (1 = one bounce)
+    uint bounces;            // scattering events after the primary surface (1 = one bounce)
     uint seed;
+    float roughness_cutoff;  // the reflections pass's: rougher surfaces get gi.specular
 } params;
 
 #define SALT_GI 0x67690000u
@@ -70,11 +77,14 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - imageLoad(g_metal_rough, px).x);
-    if (imageLoad(g_ids, px).x == NO_INSTANCE || max(albedo.r, max(albedo.g, albedo.b)) <= 0.0) {
+    vec4 mr = imageLoad(g_metal_rough, px);
+    bool rough = mr.y > params.roughness_cutoff;
+    bool diffuse = max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
+    if (imageLoad(g_ids, px).x == NO_INSTANCE || !(diffuse || rough)) {
         imageStore(out_radiance, px, vec4(0.0));
+        imageStore(out_specular, px, vec4(0.0));
         return;
     }
-    vec4 mr = imageLoad(g_metal_rough, px);
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
     float depth = imageLoad(g_depth, px).r;
@@ -82,6 +92,8 @@ void main() {
     vec3 ng = imageLoad(g_normal_geo, px).xyz;
     vec3 p = world_position(px, depth);
     vec3 origin = offset_ray_origin(p, ng, depth);
+    vec3 v = -camera_ray_dir(vec2(px) + 0.5 - frame.jitter);
+    vec3 spec_sum = vec3(0.0);
     // Estimates of the incident radiance integral (1/pi) int L cos: the Lambert lobe without
     // its albedo.
     vec3 l_sum = vec3(0.0);
@@ -93,8 +105,9 @@ void main() {
     if (ls.pdf > 0.0 && dot(ls.dir, ng) > 0.0) {
         float cos_l = max(dot(n, ls.dir), 0.0);
         if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
-            l_sum += ls.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l)) *
-                     mis_power(ls.pdf, cos_l * INV_PI);
+            float w = mis_power(ls.pdf, cos_l * INV_PI);
+            l_sum += ls.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l)) * w;
+            if (rough) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
         }
     }
 
@@ -117,6 +130,8 @@ void main() {
             bounce += outgoing(s, dir, max(params.bounces, 1u), rng);
         }
         l_sum += lobe * bounce;
+        if (rough) spec_sum += bounce * brdf_eval_specular_cos(m, n, v, dir) / pdf;
     }
-    imageStore(out_radiance, px, vec4(l_sum, 1.0));
+    imageStore(out_radiance, px, vec4(diffuse ? l_sum : vec3(0.0), 1.0));
+    imageStore(out_specular, px, vec4(spec_sum, 1.0));
 }

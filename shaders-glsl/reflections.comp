@@ -3,8 +3,9 @@
 // distribution of visible normals (a perfect mirror reflects exactly); each hit is shaded with
 // its emission and a light sample toward a light chosen by power (with a shadow ray); rays that
 // escape see the environment. Surfaces rougher than the cut-off trace nothing and take the
-// environment in the mirror direction instead. The output is the lobe's contribution (Fresnel
-// and shadowing included), ready to add; the hit distance goes alongside for the denoiser.
+// specular estimate the gi pass made from its own samples (gi.specular). The output is the lobe's
+// contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
+// for the denoiser.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
@@ -20,8 +21,9 @@ layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
-layout(set = 1, binding = 7, r32f) uniform writeonly image2D out_hit_distance;
+layout(set = 1, binding = 6, rgba32f) uniform readonly image2D gi_specular;
+layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 1, binding = 8, r32f) uniform writeonly image2D out_hit_distance;
 
 layout(push_constant) uniform Params {
     uint rays;                // specular rays per pixel
@@ -68,9 +70,7 @@ void main() {
     float n_dot_v = max(dot(n, v), 1e-4);
 
     if (m.roughness > params.roughness_cutoff) {
-        // Fallback: the environment in the mirror direction times the lobe's Fresnel.
-        vec3 r = reflect(-v, n);
-        imageStore(out_radiance, px, vec4(env_eval(r) * fresnel_schlick(f0, n_dot_v), 1.0));
+        imageStore(out_radiance, px, vec4(imageLoad(gi_specular, px).rgb, 1.0));
         imageStore(out_hit_distance, px, vec4(0.0));
         return;
     }

@@ -79,6 +79,17 @@ vec3 brdf_specular_albedo_avg(BrdfInput m) {
     return brdf_f0(m) * ab.x + ab.y;
 }
 
+// The specular lobe alone: f_spec(v, l) * cos(theta_l).
+vec3 brdf_eval_specular_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
+    float n_dot_l = dot(n, l);
+    float n_dot_v = dot(n, v);
+    if (n_dot_l <= 0.0 || n_dot_v <= 0.0) return vec3(0.0);
+    vec3 h = normalize(v + l);
+    float alpha = ggx_alpha(m.roughness);
+    vec3 f = fresnel_schlick(brdf_f0(m), dot(v, h));
+    return f * ggx_d(max(dot(n, h), 0.0), alpha) * smith_visibility(n_dot_l, n_dot_v, alpha) * n_dot_l;
+}
+
 // f(v, l) * cos(theta_l); n, v, l unit vectors, v and l pointing away from the surface.
 vec3 brdf_eval_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
     float n_dot_l = dot(n, l);

@@ -10,6 +10,8 @@ use anyhow::Result;
 pub const NAME: &str = "gi";
 /// Demodulated diffuse radiance: direct light from emitters and the environment, and indirect.
 pub const RADIANCE: &str = "gi.radiance";
+/// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples.
+pub const SPECULAR: &str = "gi.specular";
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GiSettings {
@@ -23,7 +25,8 @@ impl Default for GiSettings {
     }
 }
 
-pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32) -> Result<FullscreenPass> {
+/// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
+pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32) -> Result<FullscreenPass> {
     let inputs = [
         "gbuffer.depth",
         "gbuffer.normal",
@@ -34,7 +37,11 @@ pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32) -> Result<FullscreenPass>
     ]
     .map(|n| (n.to_string(), Read::Texel))
     .to_vec();
-    let outputs = vec![OutputDesc::storage(NAME, "radiance", vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
-    let push: Vec<u8> = [s.bounces.max(1), seed].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let outputs = vec![
+        OutputDesc::storage(NAME, "radiance", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(NAME, "specular", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+    ];
+    let mut push: Vec<u8> = [s.bounces.max(1), seed].iter().flat_map(|v| v.to_le_bytes()).collect();
+    push.extend_from_slice(&roughness_cutoff.to_le_bytes());
     FullscreenPass::new(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, push)
 }

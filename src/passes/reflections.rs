@@ -1,5 +1,6 @@
 //! reflections: the specular lobe, GGX visible-normal sampled, with a roughness cut-off above
-//! which the environment stands in (shaders-glsl/reflections.comp).
+//! which no rays are traced and gi's estimate of the lobe stands in
+//! (shaders-glsl/reflections.comp).
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Read};
@@ -15,7 +16,7 @@ pub const RADIANCE: &str = "reflections.radiance";
 pub struct ReflectionSettings {
     /// Specular rays per pixel.
     pub rays: u32,
-    /// Surfaces rougher than this trace no reflection rays (environment fallback).
+    /// Surfaces rougher than this trace no reflection rays (gi estimates their lobe).
     pub roughness_cutoff: f32,
 }
 
@@ -33,6 +34,7 @@ pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32) -> Result<Fullscr
         "gbuffer.base_color",
         "gbuffer.metal_rough",
         "gbuffer.ids",
+        super::gi::SPECULAR,
     ]
     .map(|n| (n.to_string(), Read::Texel))
     .to_vec();

@@ -32,7 +32,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
     let (shadow_passes, shadow_kept) = passes::shadows::chain(b, &settings.shadows, extent)?;
     passes.extend(shadow_passes);
     kept.extend(shadow_kept);
-    passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed)?));
+    passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed, settings.reflections.roughness_cutoff)?));
     passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed)?));
     let (mut diffuse, mut specular) = (passes::gi::RADIANCE.to_string(), passes::reflections::RADIANCE.to_string());
     if settings.denoiser {

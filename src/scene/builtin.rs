@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use glam::{Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:`.
-pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test"];
+pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test"];
 
 pub fn by_name(name: &str) -> Result<Scene> {
     match name {
@@ -15,6 +15,7 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "alpha-shadow" => Ok(alpha_shadow()),
         "shadow-test" => Ok(shadow_test()),
         "soft-shadow-test" => Ok(soft_shadow_test()),
+        "checker-test" => Ok(checker_test()),
         _ => bail!("builtin:{name}: no such built-in scene (known: {})", NAMES.join(", ")),
     }
 }
@@ -286,6 +287,77 @@ pub fn soft_shadow_test() -> Scene {
         radius: SPHERE_RADIUS,
         node: lamp,
     };
+    s
+}
+
+/// Facts about `checker_test`.
+pub mod checker_test_facts {
+    /// Checker cells across the wall; the camera sees the wall's central 2 x 2 units.
+    pub const CELLS: u32 = 8;
+    /// Base colours of the two kinds of cell (linear).
+    pub const LIGHT: f32 = 0.8;
+    pub const DARK: f32 = 0.1;
+    pub const WALL_INSTANCE: u32 = 0;
+}
+
+/// A wall with a sharp black-and-white checkerboard albedo, lit only by an emissive panel
+/// (area light, so its light is a noisy ray-traced signal): after denoising, the checkerboard
+/// must still be sharp, because the denoiser filters light with the albedo divided out.
+pub fn checker_test() -> Scene {
+    use checker_test_facts::*;
+    let mut s = Scene { name: "builtin:checker-test".into(), ..Default::default() };
+    let size = 64u32;
+    let cell = size / CELLS;
+    let to8 =
+        |v: f32| (255.0 * if v <= 0.0031308 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }).round() as u8;
+    let mut rgba = Vec::with_capacity((size * size * 4) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            let v = if (x / cell + y / cell) % 2 == 0 { to8(LIGHT) } else { to8(DARK) };
+            rgba.extend_from_slice(&[v, v, v, 255]);
+        }
+    }
+    s.images.push(super::Image { name: "checker".into(), width: size, height: size, rgba8: rgba });
+    s.textures.push(super::Texture {
+        image: Some(0),
+        sampler: super::Sampler {
+            mag_filter: super::Filter::Nearest,
+            min_filter: super::Filter::Nearest,
+            mipmaps: false,
+            wrap_s: super::Wrap::ClampToEdge,
+            wrap_t: super::Wrap::ClampToEdge,
+        },
+    });
+    s.materials.push(Material {
+        name: "checker".into(),
+        metallic_factor: 0.0,
+        roughness_factor: 1.0,
+        base_color_texture: Some(super::TextureRef { texture: 0, uv_set: 0, transform: glam::Mat3::IDENTITY }),
+        ..Default::default()
+    });
+    s.materials.push(Material {
+        name: "panel".into(),
+        metallic_factor: 0.0,
+        emissive_factor: Vec3::splat(4.0),
+        ..Default::default()
+    });
+    // The wall at z = 0 facing +Z; the panel in front of it, facing it, off to the side and
+    // above the camera's view.
+    s.meshes.push(quad(Vec3::ZERO, Vec3::X * 2.0, Vec3::Y * 2.0, 0));
+    s.meshes.push(quad(Vec3::new(0.0, 1.6, 1.2), Vec3::X * 1.6, Vec3::new(0.0, -0.8, 0.6), 1));
+    s.nodes.push(node("wall", Vec3::ZERO));
+    s.nodes.push(node("panel", Vec3::ZERO));
+    s.nodes.push(node("camera", Vec3::new(0.0, 0.0, 2.0)));
+    s.instances.push(Instance { mesh: 0, node: 0 });
+    s.instances.push(Instance { mesh: 1, node: 1 });
+    s.cameras.push(Camera {
+        name: "front".into(),
+        yfov: 0.9,
+        aspect_ratio: None,
+        znear: 0.05,
+        zfar: Some(20.0),
+        node: 2,
+    });
     s
 }
 

@@ -1,0 +1,137 @@
+//! The denoised hybrid frame against the reference (issue 5):
+//! - a sharp albedo checkerboard lit by an area light stays sharp after denoising;
+//! - the denoised static frame keeps the image's mean HDR luminance within 2% of the reference;
+//! - at frames 1, 16 and 64 the denoised error is below the raw (undenoised, one frame) error
+//!   by the stated factors. Error: relative MSE, mean((test - ref)^2 / (ref^2 + 0.01)) over RGB,
+//!   the usual measure for renderings, which a few very bright pixels (the ceiling light and its
+//!   edges) cannot dominate as they do a plain RMSE.
+//! The reference is the path tracer limited to two scattering events (what the hybrid frame
+//! models; tests/hybrid.rs checks that the undenoised frames converge to it).
+
+mod common;
+
+use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::metrics;
+use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
+use hybrid_rt::scene::builtin::{self, checker_test_facts as facts};
+use hybrid_rt::scene::{LoadOptions, Scene, load_gltf};
+use std::sync::Arc;
+
+const SIZE: u32 = 64;
+
+fn lum(img: &CpuImage) -> Vec<f64> {
+    (0..img.pixel_count() as u32)
+        .map(|i| {
+            let (x, y) = (i % img.width, i / img.width);
+            0.2126 * img.get(x, y, 0) as f64 + 0.7152 * img.get(x, y, 1) as f64 + 0.0722 * img.get(x, y, 2) as f64
+        })
+        .collect()
+}
+
+/// The full frame (TAA on, so its jitter box-filters pixels as the reference does) with or
+/// without the denoiser, scene frozen.
+fn settings(denoiser: bool) -> Settings {
+    Settings { width: SIZE, height: SIZE, frame_dt: 0.0, taa: true, denoiser, ..Default::default() }
+}
+
+fn renderer(ctx: &Arc<Context>, scene: Scene, s: Settings) -> Renderer {
+    Renderer::new(ctx, &ShaderLibrary::embedded(), scene, s, &CameraChoice::Default, common::auto_backend(ctx)).unwrap()
+}
+
+fn reference(ctx: &Arc<Context>, scene: Scene, spp: u32) -> CpuImage {
+    let s = Settings { mode: RenderMode::Reference { seed: 11, max_bounces: 2 }, ..settings(false) };
+    let mut r = renderer(ctx, scene, s);
+    for _ in 0..spp {
+        r.render_frame().unwrap();
+    }
+    let out = r.hdr_output().to_string();
+    r.read_output(&out).unwrap()
+}
+
+fn rel_mse(test: &CpuImage, truth: &CpuImage) -> f64 {
+    metrics::rel_mse(truth, test, metrics::REL_MSE_EPSILON).unwrap()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+#[test]
+fn albedo_checkerboard_stays_sharp() {
+    let ctx = common::validated_context();
+    let mut r = renderer(&ctx, builtin::checker_test(), settings(true));
+    for _ in 0..16 {
+        r.render_frame().unwrap();
+    }
+    let imgs = r.read_outputs(&["composite.color", "gbuffer.base_color", "gbuffer.ids"]).unwrap();
+    let (l, albedo) = (lum(&imgs[0]), lum(&imgs[1]));
+    // Light on the wall varies slowly; the albedo jumps by 8x between cells. Compare each
+    // pixel with its right neighbour across every cell edge: the image must jump as the albedo
+    // does (ratio of radiance ratio to albedo ratio near 1), not be smeared across the edge.
+    let (mut ratios, mut edges) = (Vec::new(), 0);
+    for y in 0..SIZE {
+        for x in 0..SIZE - 1 {
+            let (i, j) = ((y * SIZE + x) as usize, (y * SIZE + x + 1) as usize);
+            if imgs[2].get_u32(x, y, 0) != facts::WALL_INSTANCE || imgs[2].get_u32(x + 1, y, 0) != facts::WALL_INSTANCE
+            {
+                continue;
+            }
+            let (a0, a1) = (albedo[i], albedo[j]);
+            if (a0 / a1 - 1.0).abs() < 0.5 {
+                continue;
+            }
+            edges += 1;
+            ratios.push((l[i] / l[j]) / (a0 / a1));
+        }
+    }
+    ratios.sort_by(|a, b| a.total_cmp(b));
+    let median = ratios[ratios.len() / 2];
+    eprintln!("checker: {edges} cell-edge pixel pairs, median (radiance ratio / albedo ratio) {median:.3}");
+    assert!(edges > 50, "too few edges: {edges}");
+    assert!((median - 1.0).abs() < 0.15, "the checkerboard edge contrast changed by the denoiser: {median:.3}");
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn denoised_frames_keep_energy_and_beat_raw_noise() {
+    let ctx = common::validated_context();
+    let scene = || load_gltf(&common::default_scene(), &LoadOptions::default()).unwrap();
+    let truth = reference(&ctx, scene(), 512);
+
+    let mut raw = renderer(&ctx, scene(), settings(false));
+    raw.render_frame().unwrap();
+    // One raw frame: no denoiser, no history (TAA's output equals its input on the first frame).
+    let raw_error = rel_mse(&raw.read_output("taa.color").unwrap(), &truth);
+    drop(raw);
+
+    let mut den = renderer(&ctx, scene(), settings(true));
+    let mut errors = Vec::new();
+    let mut last = None;
+    for frame in 1..=64u32 {
+        den.render_frame().unwrap();
+        if [1, 16, 64].contains(&frame) {
+            let img = den.read_output("taa.color").unwrap();
+            errors.push((frame, rel_mse(&img, &truth)));
+            last = Some(img);
+        }
+    }
+    let (last, truth_l) = (lum(&last.unwrap()), lum(&truth));
+    let energy = (mean(&last) - mean(&truth_l)).abs() / mean(&truth_l);
+    eprintln!(
+        "raw 1-frame relMSE {raw_error:.4}; denoised {errors:?}; mean luminance {:.4} vs reference {:.4} ({:.2}%)",
+        mean(&last),
+        mean(&truth_l),
+        energy * 100.0
+    );
+    assert!(energy < 0.02, "denoised mean luminance off by {:.2}%", energy * 100.0);
+    // Stated factors (measured on lavapipe: 7x, 12x, 10x): frame 1 (spatial filtering of one
+    // sample) at least 4x below the raw single frame; frames 16 and 64 (history) at least 8x.
+    // Frame 64 is not below frame 16: what remains is the filter's bias, not noise.
+    for ((frame, e), factor) in errors.iter().zip([4.0, 8.0, 8.0]) {
+        assert!(e * factor < raw_error, "frame {frame}: denoised relMSE {e:.4} not {factor}x below raw {raw_error:.4}");
+    }
+    drop(den);
+    common::assert_validation_clean(ctx);
+}
