@@ -11,7 +11,9 @@ mod shader_compile;
 use shader_compile::{RAY_VARIANTS, compile, dependencies, is_traced, list_modules, module_key};
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl");
+    // Read at run time: a build script compiled for one checkout can be reused by another.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("CARGO_MANIFEST_DIR");
+    let root = Path::new(&manifest).join("shaders-glsl");
     let out_dir = std::path::PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
     println!("cargo:rerun-if-changed={}", root.display());
     println!("cargo:rerun-if-changed={}", root.join("common").display());

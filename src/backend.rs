@@ -37,9 +37,6 @@ impl Backend {
 /// Picks the backend for a device and says why.
 pub fn resolve(caps: &Capabilities, choice: BackendChoice) -> Result<(Backend, String)> {
     let missing = || {
-        if caps.ray_tracing_hidden {
-            return "ray tracing hidden by request (HYBRID_RT_HIDE_RAY_TRACING)".to_string();
-        }
         let mut m = Vec::new();
         if !caps.acceleration_structure {
             m.push("no VK_KHR_acceleration_structure");
@@ -53,7 +50,8 @@ pub fn resolve(caps: &Capabilities, choice: BackendChoice) -> Result<(Backend, S
         if !caps.deferred_host_operations {
             m.push("no VK_KHR_deferred_host_operations");
         }
-        m.join(", ")
+        let m = m.join(", ");
+        if caps.ray_tracing_hidden { format!("{m}: hidden by request (HYBRID_RT_HIDE_RAY_TRACING)") } else { m }
     };
     match choice {
         BackendChoice::Compute => Ok((Backend::Compute, "forced by --backend compute".into())),

@@ -37,6 +37,8 @@ pub struct Capture {
     pub dir: PathBuf,
     /// Write each frame into its own `frame_NNNN` folder (several frames were asked for).
     per_frame_folders: bool,
+    /// Replace files that are in the way.
+    force: bool,
     manifest: Manifest,
 }
 
@@ -53,6 +55,7 @@ impl Capture {
         Ok(Self {
             dir: dir.to_path_buf(),
             per_frame_folders,
+            force,
             manifest: Manifest { scene: scene.to_string(), device: device.to_string(), entries: Vec::new() },
         })
     }
@@ -64,6 +67,13 @@ impl Capture {
         let folder = if self.per_frame_folders { self.dir.join(format!("frame_{frame:04}")) } else { self.dir.clone() };
         let names = r.graph.output_order.clone();
         let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        // A folder without a manifest may still hold files of the same names (a capture whose
+        // manifest was removed, or the user's own): none is replaced without --force.
+        for name in &names {
+            for ext in ["exr", "png"] {
+                image_io::check_overwrite(&folder.join(format!("{name}.{ext}")), self.force)?;
+            }
+        }
         let images = r.read_outputs(&refs)?;
         for (name, img) in names.iter().zip(&images) {
             let desc = r.graph.images.desc(name).expect("graph output").clone();

@@ -92,13 +92,44 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     // Keep the extension last: image encoders choose the format by it.
     let tmp: PathBuf = dir.join(format!(".{}.partial-{}{}", name, std::process::id(), extension_of(path)));
-    let result = write(&tmp).and_then(|_| {
-        std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot move into place", path.display()))
-    });
+    let result = write(&tmp)
+        .and_then(|_| injected_failure(&name, &tmp))
+        // On disk before the rename: after a system crash the name holds the old file or the
+        // whole new one, never a new one cut short.
+        .and_then(|_| {
+            std::fs::File::open(&tmp)
+                .and_then(|f| f.sync_all())
+                .with_context(|| format!("{}: cannot flush to disk", tmp.display()))
+        })
+        .and_then(|_| {
+            std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot move into place", path.display()))
+        });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// A test hook (tests/nothing_lost.rs): `HYBRID_RT_FAIL_WRITE=NAME` makes the write of a file
+/// named NAME fail after its temporary file was written, cut to half its length, as a write
+/// that died part way; `NAME:abort` kills the process at that point instead, as a crash.
+fn injected_failure(name: &str, tmp: &Path) -> Result<()> {
+    let Ok(spec) = std::env::var("HYBRID_RT_FAIL_WRITE") else {
+        return Ok(());
+    };
+    let (target, abort) = match spec.strip_suffix(":abort") {
+        Some(t) => (t, true),
+        None => (spec.as_str(), false),
+    };
+    if target != name {
+        return Ok(());
+    }
+    let half = std::fs::metadata(tmp).map(|m| m.len() / 2).unwrap_or(0);
+    std::fs::OpenOptions::new().write(true).open(tmp).and_then(|f| f.set_len(half))?;
+    if abort {
+        std::process::abort();
+    }
+    bail!("{name}: write failed part way (injected by HYBRID_RT_FAIL_WRITE)")
 }
 
 fn extension_of(path: &Path) -> String {

@@ -3,6 +3,7 @@
 //! followed by denoising and tonemapping. See ../README.md for the tour.
 
 pub mod accel;
+pub mod app;
 pub mod backend;
 pub mod bench;
 pub mod capture;

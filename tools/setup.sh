@@ -76,7 +76,22 @@ else
   say "build tools, Vulkan loader and validation layers: present"
 fi
 
-# 4. a quick check that the loader sees lavapipe
+# 4. the viewer's window test (tests/viewer.rs): a virtual X server, ImageMagick (a fallback
+# screenshot) and the X11 libraries winit loads at run time
+XPKGS=(xvfb imagemagick libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6)
+missing=()
+for p in "${XPKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  apt_update
+  say "installing: ${missing[*]}"
+  apt_install "${missing[@]}"
+else
+  say "Xvfb, ImageMagick and the X11 libraries: present"
+fi
+
+# 5. a quick check that the loader sees lavapipe
 if command -v vulkaninfo >/dev/null 2>&1; then
   dev=$(vulkaninfo --summary 2>/dev/null | grep -m1 'deviceName' | sed 's/.*= //' || true)
   say "Vulkan device: ${dev:-none found}"

@@ -1,7 +1,12 @@
-//! Benchmarks: `hybrid-rt bench rays` (ray throughput of both backends on the same rays).
+//! Benchmarks: `hybrid-rt bench rays` (ray throughput of both backends on the same rays) and
+//! `hybrid-rt bench sweep` (frame time against error for many configurations, with a chart).
 //! Results go to the terminal as a table and to disk as JSON.
 
+pub mod chart;
 pub mod rays;
+pub mod soak;
+pub mod sweep;
+pub mod target;
 
 use std::path::PathBuf;
 
@@ -20,4 +25,18 @@ pub fn median(values: &[f64]) -> f64 {
     }
     let n = v.len();
     if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// `s` lowercased with every run of other characters than ASCII letters and digits turned
+/// into one `-`: a device or camera name as part of a file name.
+pub fn slug(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        if c.is_ascii_alphanumeric() {
+            out.push(c.to_ascii_lowercase());
+        } else if !out.is_empty() && !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    out.trim_end_matches('-').to_string()
 }

@@ -1,12 +1,14 @@
-//! `hybrid-rt bench ...`: benchmarks. `bench rays` measures both ray backends on the same rays.
+//! `hybrid-rt bench ...`: benchmarks. `bench rays` measures both ray backends on the same rays;
+//! `bench sweep` measures frame time against error over configurations of the hybrid frame.
 
 use super::{GpuArgs, finish_validation, load_scene, parse_size};
 use crate::backend::{Backend, BackendChoice};
-use crate::bench::{self, rays};
+use crate::bench::{self, rays, sweep};
 use crate::gpu::{Context, ContextOptions, ShaderLibrary};
 use crate::image_io;
+use crate::render::CameraChoice;
 use crate::scene::LoadOptions;
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 
@@ -21,6 +23,13 @@ enum BenchCommand {
     /// Build time, memory and rays/s of both ray backends on the same primary, shadow and
     /// incoherent rays (the definition is in src/bench/rays.rs).
     Rays(RaysArgs),
+    /// Many frames of an animated scene (default: 10,000 of the Cornell box at 32x32): host
+    /// and device memory sampled every N frames after a warm-up, and frame times.
+    Soak(super::soak::SoakArgs),
+    /// Frame time (GPU timestamps) against error (HDR-FLIP, PSNR, SSIM against a cached
+    /// path-traced reference) over configurations of the hybrid frame; writes JSON and a chart
+    /// (PNG and SVG) with the Pareto front, and caches the result for `render --target-ms`.
+    Sweep(SweepArgs),
 }
 
 #[derive(Args)]
@@ -50,6 +59,8 @@ struct RaysArgs {
 pub fn run(a: &BenchArgs) -> Result<()> {
     match &a.what {
         BenchCommand::Rays(r) => run_rays(r),
+        BenchCommand::Soak(s) => super::soak::run(s),
+        BenchCommand::Sweep(s) => run_sweep(s),
     }
 }
 
@@ -103,5 +114,123 @@ fn run_rays(a: &RaysArgs) -> Result<()> {
     });
     image_io::write_atomic(&out, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
     println!("wrote {}", out.display());
+    finish_validation(ctx)
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    /// Scenes (.gltf/.glb or builtin:NAME); default: the project's Cornell box.
+    scenes: Vec<String>,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Image sizes, WIDTHxHEIGHT, comma-separated; each gets its own reference and chart.
+    #[arg(long, value_delimiter = ',', default_value = "320x180")]
+    size: Vec<String>,
+    /// Configurations, comma-separated, e.g. d4-s5-b1-r1 (d: SVGF iterations, 0 = denoiser off;
+    /// s: shadow s_max; b: GI bounces; r: reflection rays; t0: TAA off). Default: 14
+    /// configurations (see src/bench/sweep.rs).
+    #[arg(long, value_delimiter = ',')]
+    configs: Vec<String>,
+    /// Frames per configuration (static camera); the error is measured on the last.
+    #[arg(long, default_value_t = 48)]
+    frames: u32,
+    /// The last this-many frames give the median GPU frame time.
+    #[arg(long, default_value_t = 8)]
+    timed_frames: u32,
+    /// Samples per pixel of the reference (even: it is the mean of two independent halves).
+    #[arg(long, default_value_t = 512)]
+    reference_spp: u32,
+    /// Scattering events per reference path at most (Russian roulette ends them earlier).
+    #[arg(long, default_value_t = 256)]
+    reference_bounces: u32,
+    /// Render the reference again even when it is cached (and replace the cached one).
+    #[arg(long)]
+    fresh_reference: bool,
+    /// Scene camera by name or index (default: the first camera, or a framing camera).
+    #[arg(long)]
+    camera: Option<CameraChoice>,
+    /// Output folder for sweep.json and the charts (default: out/bench/sweep-<unix time>/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Cache of references and sweep results (`render --target-*` reads out/cache).
+    #[arg(long, default_value = "out/cache")]
+    cache_dir: PathBuf,
+    /// Replace existing output files.
+    #[arg(long)]
+    force: bool,
+}
+
+fn run_sweep(a: &SweepArgs) -> Result<()> {
+    let sizes = a.size.iter().map(|s| parse_size(s)).collect::<Result<Vec<_>>>()?;
+    let configs = if a.configs.is_empty() {
+        sweep::default_configs()
+    } else {
+        a.configs.iter().map(|c| c.parse()).collect::<Result<Vec<sweep::Config>>>()?
+    };
+    let scenes = if a.scenes.is_empty() {
+        vec![super::default_scene_path().to_string_lossy().into_owned()]
+    } else {
+        a.scenes.clone()
+    };
+    let out = a.out.clone().unwrap_or_else(|| bench::default_output("sweep").with_extension(""));
+    let json_path = out.join("sweep.json");
+    // Every output is checked before hours of rendering, not after.
+    let charts: Vec<(PathBuf, PathBuf)> = scenes
+        .iter()
+        .flat_map(|s| {
+            let stem = bench::slug(&Path::new(s).file_stem().map(|f| f.to_string_lossy()).unwrap_or_default());
+            let out = &out;
+            sizes
+                .iter()
+                .map(move |(w, h)| (out.join(format!("{stem}-{w}x{h}.png")), out.join(format!("{stem}-{w}x{h}.svg"))))
+        })
+        .collect();
+    if charts.iter().collect::<std::collections::HashSet<_>>().len() != charts.len() {
+        bail!("two scenes share a file name: their charts would overwrite each other; sweep them separately");
+    }
+    image_io::check_overwrite(&json_path, a.force)?;
+    for (png, svg) in &charts {
+        image_io::check_overwrite(png, a.force)?;
+        image_io::check_overwrite(svg, a.force)?;
+    }
+    let loaded = scenes.iter().map(|s| load_scene(s, &LoadOptions::default())).collect::<Result<Vec<_>>>()?;
+    let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
+    let (backend, why) = crate::backend::resolve(&ctx.caps, a.gpu.backend)?;
+    log::info!("ray backend: {} ({why})", backend.variant());
+    let shaders = ShaderLibrary::embedded();
+    let start = std::time::Instant::now();
+    let mut sweeps = Vec::new();
+    let mut chart = charts.iter();
+    for (spec, scene) in scenes.iter().zip(&loaded) {
+        for &(width, height) in &sizes {
+            let opts = sweep::Options {
+                width,
+                height,
+                configs: configs.clone(),
+                frames: a.frames,
+                timed_frames: a.timed_frames,
+                reference_spp: a.reference_spp,
+                reference_bounces: a.reference_bounces,
+                camera: a.camera.clone().unwrap_or_default(),
+                cache_dir: a.cache_dir.clone(),
+                fresh_reference: a.fresh_reference,
+            };
+            let s = sweep::sweep_scene(&ctx, &shaders, spec, scene, backend, &opts)?;
+            let (png, svg) = chart.next().expect("one chart per scene and size");
+            crate::bench::chart::write(&s, png, svg)?;
+            print!("{}", sweep::table(&s));
+            println!("chart: {} and {}", png.display(), svg.display());
+            sweeps.push(s);
+        }
+    }
+    let json = serde_json::json!({
+        "device": ctx.caps.device_name,
+        "driver": ctx.caps.driver,
+        "backend": backend.variant(),
+        "seconds": start.elapsed().as_secs_f64(),
+        "sweeps": sweeps,
+    });
+    image_io::write_atomic(&json_path, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
+    println!("wrote {}", json_path.display());
     finish_validation(ctx)
 }

@@ -3,8 +3,11 @@
 
 mod bench;
 mod info;
+mod plan;
 mod reference;
 mod render;
+mod soak;
+mod view;
 
 use crate::backend::BackendChoice;
 use crate::scene::{self, Limits, LoadOptions, Scene};
@@ -26,10 +29,14 @@ enum Command {
     Render(render::RenderArgs),
     /// Show the Vulkan device, its ray-tracing capabilities and the backend `auto` picks.
     Info(info::InfoArgs),
+    /// Show which passes the frame runs for a scene and why (no more work than it needs).
+    Plan(plan::PlanArgs),
     /// Benchmarks (see `hybrid-rt bench --help`).
     Bench(bench::BenchArgs),
     /// Render the ground truth with the progressive path tracer to a linear EXR.
     Reference(reference::ReferenceArgs),
+    /// Open a window on the hybrid frame: camera, overlay, any pass output, hot reload.
+    View(view::ViewArgs),
 }
 
 /// Arguments every GPU command takes.
@@ -172,13 +179,19 @@ fn run(cli: Cli) -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => render::run(&a),
         Command::Info(a) => info::run(&a),
+        Command::Plan(a) => plan::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::Reference(a) => reference::run(&a),
+        Command::View(a) => view::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
+            if e.chain().any(|c| c.is::<crate::gpu::OutOfDeviceMemory>()) {
+                // Frame-sized images are most of what the renderer allocates.
+                eprintln!("hint: the device is out of memory; a smaller --size needs less");
+            }
             ExitCode::FAILURE
         }
     }

@@ -3,6 +3,7 @@
 
 use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
 use crate::backend;
+use crate::bench;
 use crate::capture::Capture;
 use crate::gpu::{Context, ContextOptions, ShaderLibrary};
 use crate::image_io;
@@ -32,6 +33,9 @@ pub struct RenderArgs {
     /// Write every pass's named outputs (EXR + PNG + manifest.json) into this folder.
     #[arg(long)]
     dump_passes: Option<PathBuf>,
+    /// Run every pass, ignoring the frame plan (`hybrid-rt plan` shows what it leaves out).
+    #[arg(long)]
+    full: bool,
     /// Frames to dump, 1-based, comma-separated (default: the last frame).
     #[arg(long, value_delimiter = ',')]
     dump_frames: Vec<u32>,
@@ -47,6 +51,14 @@ pub struct RenderArgs {
     /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones.
     #[arg(long)]
     shader_dir: Option<PathBuf>,
+    /// Pick the most accurate configuration whose GPU frame time is at most this many ms, from
+    /// this scene's speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
+    #[arg(long, value_name = "MS", conflicts_with_all = ["target_error", "no_taa"])]
+    target_ms: Option<f64>,
+    /// Pick the fastest configuration whose HDR-FLIP error is at most this, from this scene's
+    /// speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
+    #[arg(long, value_name = "FLIP", conflicts_with = "no_taa")]
+    target_error: Option<f64>,
 }
 
 pub fn run(a: &RenderArgs) -> Result<()> {
@@ -71,8 +83,29 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     let scene_name = scene.name.clone();
-    let settings = Settings { width, height, exposure: a.exposure, taa: !a.no_taa, ..Default::default() };
+    let mut settings =
+        Settings { width, height, exposure: a.exposure, taa: !a.no_taa, full: a.full, ..Default::default() };
     let camera = a.camera.clone().unwrap_or_default();
+    let target = match (a.target_ms, a.target_error) {
+        (Some(t), _) => Some(bench::target::Target::Ms(t)),
+        (_, Some(e)) => Some(bench::target::Target::Error(e)),
+        _ => None,
+    };
+    if let Some(target) = target {
+        let spec = a.scene.scene.clone().unwrap_or_else(|| super::default_scene_path().to_string_lossy().into_owned());
+        let cache = std::path::Path::new("out/cache");
+        let (config, why) = bench::sweep::pick_for_render(
+            cache,
+            &spec,
+            &camera,
+            (width, height),
+            picked,
+            &ctx.caps.device_name,
+            target,
+        )?;
+        config.apply(&mut settings);
+        println!("configuration {why}");
+    }
     let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &camera, picked)?;
 
     let mut capture = match &a.dump_passes {

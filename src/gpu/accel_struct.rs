@@ -233,7 +233,7 @@ pub fn build_blases(
             vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
         )
     }
-    .context("read compacted sizes")?;
+    .map_err(|e| super::commands::device_error("vkGetQueryPoolResults (compacted BLAS sizes)", e))?;
     let mut compacted = Vec::with_capacity(compactable.len());
     for (k, &i) in compactable.iter().enumerate() {
         let size = if sizes[k] == 0 { structs[i].size } else { sizes[k] };

@@ -44,14 +44,15 @@ impl CommandPool {
                 )
             }?;
             let r = f(cmd)?;
-            unsafe { d.end_command_buffer(cmd) }?;
+            unsafe { d.end_command_buffer(cmd) }.map_err(|e| device_error("vkEndCommandBuffer", e))?;
             let cmds = [cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
             unsafe {
-                d.reset_fences(&[self.fence])?;
-                d.queue_submit(self.ctx.queue, &[submit], self.fence).context("vkQueueSubmit")?;
+                d.reset_fences(&[self.fence]).map_err(|e| device_error("vkResetFences", e))?;
+                d.queue_submit(self.ctx.queue, &[submit], self.fence).map_err(|e| device_error("vkQueueSubmit", e))?;
                 // A generous timeout: lavapipe is slow, but a GPU hang must not hang the program.
-                d.wait_for_fences(&[self.fence], true, 600_000_000_000).map_err(device_error)?;
+                d.wait_for_fences(&[self.fence], true, 600_000_000_000)
+                    .map_err(|e| device_error("vkWaitForFences", e))?;
             }
             Ok(r)
         })();
@@ -60,12 +61,22 @@ impl CommandPool {
     }
 }
 
-/// Turns a fence-wait failure into a message the user can act on.
-fn device_error(e: vk::Result) -> anyhow::Error {
+/// Turns a failed submission, wait or query read into a message the user can act on. Every
+/// call in src/gpu that can report device loss (vkQueueSubmit, vkWaitForFences,
+/// vkDeviceWaitIdle, vkGetQueryPoolResults with WAIT) goes through here; the destructors ignore
+/// it, as destroying objects of a lost device is allowed.
+pub(super) fn device_error(call: &str, e: vk::Result) -> anyhow::Error {
     match e {
-        vk::Result::ERROR_DEVICE_LOST => anyhow::anyhow!("the GPU device was lost (driver reset or crash)"),
-        vk::Result::TIMEOUT => anyhow::anyhow!("the GPU did not finish within 10 minutes (hang?)"),
-        other => anyhow::anyhow!("waiting for the GPU failed: {other}"),
+        vk::Result::ERROR_DEVICE_LOST => anyhow::anyhow!(
+            "the GPU device was lost ({call}: driver reset, crash or GPU hang); nothing more can be rendered in this \
+             run: run again, and if it repeats try a smaller --size or --backend compute"
+        ),
+        vk::Result::TIMEOUT => anyhow::anyhow!("the GPU did not finish within 10 minutes ({call}; hang?)"),
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => {
+            anyhow::anyhow!("out of device memory ({call}); try a smaller --size")
+        }
+        vk::Result::ERROR_OUT_OF_HOST_MEMORY => anyhow::anyhow!("out of host memory ({call})"),
+        other => anyhow::anyhow!("{call} failed: {other}"),
     }
 }
 
@@ -118,4 +129,21 @@ pub fn image_barrier(
         .dst_access_mask(dst.1)];
     let dep = vk::DependencyInfo::default().image_memory_barriers(&b);
     ctx.cmd_pipeline_barrier2(cmd, &dep);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Device loss cannot be caused on demand (lavapipe never loses its device), so the message
+    /// is checked here; the calls that can return it all map through `device_error`.
+    #[test]
+    fn device_loss_and_hangs_read_clearly() {
+        let lost = device_error("vkQueueSubmit", vk::Result::ERROR_DEVICE_LOST).to_string();
+        assert!(lost.contains("device was lost") && lost.contains("vkQueueSubmit"), "{lost}");
+        let hang = device_error("vkWaitForFences", vk::Result::TIMEOUT).to_string();
+        assert!(hang.contains("10 minutes"), "{hang}");
+        let oom = device_error("vkQueueSubmit", vk::Result::ERROR_OUT_OF_DEVICE_MEMORY).to_string();
+        assert!(oom.contains("out of device memory") && oom.contains("--size"), "{oom}");
+    }
 }

@@ -20,6 +20,79 @@ pub struct ContextOptions {
     pub validate: bool,
     /// Pretend the device lacks ray query and acceleration structures (tests, fall-back path).
     pub hide_ray_tracing: bool,
+    /// The display a window will be shown on (the viewer): the instance gets the surface
+    /// extensions it needs and the device VK_KHR_swapchain. `None` (headless) changes nothing.
+    pub window: Option<raw_window_handle::RawDisplayHandle>,
+    /// Most bytes of device memory the renderer may allocate (tests: `HYBRID_RT_MEMORY_LIMIT_MIB`);
+    /// past it an allocation fails exactly as on a full device (see memory.rs).
+    pub memory_limit: Option<u64>,
+}
+
+/// The oldest Vulkan hybrid-rt runs on: dynamic rendering and synchronization2 come from core
+/// 1.3 or from their KHR extensions on 1.2.
+const MIN_VULKAN: u32 = vk::API_VERSION_1_2;
+
+/// The version the loader and the device must reach: 1.2, or more when
+/// `HYBRID_RT_REQUIRE_VULKAN=MAJOR.MINOR` asks. Tests raise it to drive the two version checks
+/// (loader, device) on a machine whose Vulkan is new enough; it can only raise the bar.
+fn required_version() -> Result<u32> {
+    let Some(v) = std::env::var_os("HYBRID_RT_REQUIRE_VULKAN") else {
+        return Ok(MIN_VULKAN);
+    };
+    let s = v.to_string_lossy();
+    let parsed = s.split_once('.').and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)));
+    match parsed {
+        // The field widths of VK_MAKE_API_VERSION.
+        Some((major, minor)) if major < 128 && minor < 1024 => {
+            Ok(vk::make_api_version(0, major, minor, 0).max(MIN_VULKAN))
+        }
+        _ => bail!("HYBRID_RT_REQUIRE_VULKAN={s}: expected MAJOR.MINOR, e.g. 1.3"),
+    }
+}
+
+fn version_text(v: u32) -> String {
+    format!("{}.{}", vk::api_version_major(v), vk::api_version_minor(v))
+}
+
+/// Ray-tracing extensions the probe pretends the device lacks: `HYBRID_RT_HIDE_RAY_TRACING`
+/// set to `acceleration_structure` or `ray_query` hides that one, any other value all of them
+/// (with deferred host operations), as does `ContextOptions::hide_ray_tracing`.
+#[derive(Clone, Copy, Default)]
+struct Hidden {
+    acceleration_structure: bool,
+    ray_query: bool,
+    deferred_host_operations: bool,
+}
+
+impl Hidden {
+    fn new(all: bool) -> Self {
+        let every = Self { acceleration_structure: true, ray_query: true, deferred_host_operations: true };
+        if all {
+            return every;
+        }
+        match std::env::var("HYBRID_RT_HIDE_RAY_TRACING").ok().as_deref() {
+            None => Self::default(),
+            Some("acceleration_structure") => Self { acceleration_structure: true, ..Self::default() },
+            Some("ray_query") => Self { ray_query: true, ..Self::default() },
+            Some(_) => every,
+        }
+    }
+
+    fn any(&self) -> bool {
+        self.acceleration_structure || self.ray_query || self.deferred_host_operations
+    }
+}
+
+/// `HYBRID_RT_MEMORY_LIMIT_MIB`, in bytes.
+fn memory_limit_from_env() -> Result<Option<u64>> {
+    let Some(v) = std::env::var_os("HYBRID_RT_MEMORY_LIMIT_MIB") else {
+        return Ok(None);
+    };
+    let s = v.to_string_lossy();
+    match s.parse::<u64>() {
+        Ok(mib) => Ok(Some(mib.saturating_mul(1 << 20))),
+        Err(_) => bail!("HYBRID_RT_MEMORY_LIMIT_MIB={s}: expected a whole number of MiB"),
+    }
 }
 
 /// What the device can do, as far as the renderer cares.
@@ -63,6 +136,7 @@ struct Extensions {
     acceleration_structure: bool,
     ray_query: bool,
     deferred_host_operations: bool,
+    swapchain: bool,
 }
 
 /// The Vulkan instance, device and allocator. Resources hold an `Arc<Context>`, so the device
@@ -76,6 +150,8 @@ pub struct Context {
     pub queue_family: u32,
     pub caps: Capabilities,
     pub allocator: ManuallyDrop<Mutex<gpu_allocator::vulkan::Allocator>>,
+    /// See `ContextOptions::memory_limit`.
+    pub(super) memory_limit: Option<u64>,
     pub push_descriptor: ash::khr::push_descriptor::Device,
     dynamic_rendering: ash::khr::dynamic_rendering::Device,
     sync2: ash::khr::synchronization2::Device,
@@ -90,8 +166,13 @@ impl Context {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             anyhow!("cannot load the Vulkan loader (libvulkan.so.1): {e}; run tools/setup.sh or install libvulkan1")
         })?;
+        // Checked before anything is created, so a bad value needs no clean-up.
+        let memory_limit = match opts.memory_limit {
+            Some(limit) => Some(limit),
+            None => memory_limit_from_env()?,
+        };
         let validation = Arc::new(ValidationLog::default());
-        let (instance, debug_utils, api_version) = create_instance(&entry, opts.validate, &validation)?;
+        let (instance, debug_utils, api_version) = create_instance(&entry, opts, &validation)?;
         let parts = match open_device(&instance, opts, api_version) {
             Ok(p) => p,
             Err(e) => {
@@ -122,6 +203,7 @@ impl Context {
             queue_family,
             caps,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            memory_limit,
             debug_utils,
             debug_device,
             validation,
@@ -180,7 +262,7 @@ impl Context {
     }
 
     pub fn wait_idle(&self) -> Result<()> {
-        unsafe { self.device.device_wait_idle() }.context("vkDeviceWaitIdle")
+        unsafe { self.device.device_wait_idle() }.map_err(|e| super::commands::device_error("vkDeviceWaitIdle", e))
     }
 }
 
@@ -212,8 +294,8 @@ struct DeviceParts {
 
 fn open_device(instance: &ash::Instance, opts: &ContextOptions, instance_api: u32) -> Result<DeviceParts> {
     let (physical_device, queue_family) = pick_physical_device(instance)?;
-    let hide = opts.hide_ray_tracing || std::env::var_os("HYBRID_RT_HIDE_RAY_TRACING").is_some();
-    let (exts, caps) = probe(instance, physical_device, queue_family, hide, instance_api);
+    let hidden = Hidden::new(opts.hide_ray_tracing);
+    let (exts, caps) = probe(instance, physical_device, queue_family, hidden, instance_api);
     if !caps.push_descriptor || !caps.dynamic_rendering || !caps.synchronization2 {
         bail!(
             "the Vulkan device '{}' lacks a required feature (push descriptors: {}, dynamic rendering: {}, synchronization2: {})",
@@ -223,7 +305,11 @@ fn open_device(instance: &ash::Instance, opts: &ContextOptions, instance_api: u3
             caps.synchronization2
         );
     }
-    let device = create_device(instance, physical_device, queue_family, &exts, &caps)?;
+    let swapchain = opts.window.is_some();
+    if swapchain && !exts.swapchain {
+        bail!("the Vulkan device '{}' cannot present to a window (no VK_KHR_swapchain)", caps.device_name);
+    }
+    let device = create_device(instance, physical_device, queue_family, &exts, &caps, swapchain)?;
     let allocator = gpu_allocator::vulkan::Allocator::new(&gpu_allocator::vulkan::AllocatorCreateDesc {
         instance: instance.clone(),
         device: device.clone(),
@@ -244,15 +330,17 @@ fn open_device(instance: &ash::Instance, opts: &ContextOptions, instance_api: u3
 
 fn create_instance(
     entry: &ash::Entry,
-    validate: bool,
+    opts: &ContextOptions,
     log: &Arc<ValidationLog>,
 ) -> Result<(ash::Instance, DebugUtils, u32)> {
+    let validate = opts.validate;
+    let required = required_version()?;
     let loader_version = unsafe { entry.try_enumerate_instance_version() }?.unwrap_or(vk::API_VERSION_1_0);
-    if loader_version < vk::API_VERSION_1_2 {
+    if loader_version < required {
         bail!(
-            "the Vulkan loader is version {}.{}, hybrid-rt needs 1.2 or newer: update libvulkan1",
-            vk::api_version_major(loader_version),
-            vk::api_version_minor(loader_version)
+            "the Vulkan loader is version {}, hybrid-rt needs {} or newer: update libvulkan1",
+            version_text(loader_version),
+            version_text(required)
         );
     }
     let api_version = loader_version.min(vk::API_VERSION_1_3);
@@ -266,6 +354,11 @@ fn create_instance(
     let debug_utils_available = has_ext(ash::ext::debug_utils::NAME);
     if debug_utils_available {
         ext_ptrs.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    if let Some(display) = opts.window {
+        let surface_exts = ash_window::enumerate_required_extensions(display)
+            .context("this windowing system has no Vulkan surface support")?;
+        ext_ptrs.extend_from_slice(surface_exts);
     }
     if validate {
         let layers = unsafe { entry.enumerate_instance_layer_properties() }?;
@@ -291,7 +384,12 @@ fn create_instance(
         // Chained at creation too, so messages from vkCreateInstance/vkDestroyInstance are caught.
         info = info.push_next(&mut features).push_next(&mut messenger_info);
     }
-    let instance = unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance")?;
+    let instance = match unsafe { entry.create_instance(&info, None) } {
+        Ok(i) => i,
+        // What the loader answers when it finds no driver (ICD) at all.
+        Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => bail!("no Vulkan device found: {}", no_driver_hint()),
+        Err(e) => return Err(e).context("vkCreateInstance"),
+    };
     let debug_utils = if validate {
         let loader = ash::ext::debug_utils::Instance::new(entry, &instance);
         let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_create_info(log), None) };
@@ -318,10 +416,28 @@ fn messenger_create_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCre
         .user_data(Arc::as_ptr(log) as *mut std::ffi::c_void)
 }
 
+/// Why no driver was found and what to do, naming the loader's driver overrides when set
+/// (a stale override is a common cause).
+fn no_driver_hint() -> String {
+    let overrides: Vec<String> = ["VK_DRIVER_FILES", "VK_ICD_FILENAMES", "VK_ADD_DRIVER_FILES"]
+        .iter()
+        .filter_map(|k| std::env::var(k).ok().map(|v| format!("{k}={v}")))
+        .collect();
+    let looked = if overrides.is_empty() {
+        String::new()
+    } else {
+        format!(" (it looked only where {} says)", overrides.join(", "))
+    };
+    format!(
+        "the Vulkan loader found no driver{looked}; install a Vulkan driver (tools/setup.sh installs Mesa's lavapipe)"
+    )
+}
+
 fn pick_physical_device(instance: &ash::Instance) -> Result<(vk::PhysicalDevice, u32)> {
+    let required = required_version()?;
     let devices = unsafe { instance.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices")?;
     if devices.is_empty() {
-        bail!("no Vulkan device found: install a Vulkan driver (tools/setup.sh installs Mesa's lavapipe)");
+        bail!("no Vulkan device found: {}", no_driver_hint());
     }
     let score = |pd: vk::PhysicalDevice| {
         let props = unsafe { instance.get_physical_device_properties(pd) };
@@ -337,11 +453,11 @@ fn pick_physical_device(instance: &ash::Instance) -> Result<(vk::PhysicalDevice,
     for pd in devices {
         let props = unsafe { instance.get_physical_device_properties(pd) };
         let name = props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
-        if props.api_version < vk::API_VERSION_1_2 {
+        if props.api_version < required {
             rejected.push(format!(
-                "{name}: Vulkan {}.{} (needs 1.2)",
-                vk::api_version_major(props.api_version),
-                vk::api_version_minor(props.api_version)
+                "{name}: Vulkan {} (needs {})",
+                version_text(props.api_version),
+                version_text(required)
             ));
             continue;
         }
@@ -364,7 +480,7 @@ fn probe(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
     queue_family: u32,
-    hide_ray_tracing: bool,
+    hidden: Hidden,
     instance_api: u32,
 ) -> (Extensions, Capabilities) {
     let props = unsafe { instance.get_physical_device_properties(pd) };
@@ -404,9 +520,10 @@ fn probe(
         push_descriptor: has(ash::khr::push_descriptor::NAME),
         dynamic_rendering_ext: !is_13 && has(ash::khr::dynamic_rendering::NAME),
         synchronization2_ext: !is_13 && has(ash::khr::synchronization2::NAME),
-        acceleration_structure: !hide_ray_tracing && has_as && fas.acceleration_structure == vk::TRUE,
-        ray_query: !hide_ray_tracing && has_rq && frq.ray_query == vk::TRUE,
-        deferred_host_operations: !hide_ray_tracing && has(ash::khr::deferred_host_operations::NAME),
+        acceleration_structure: !hidden.acceleration_structure && has_as && fas.acceleration_structure == vk::TRUE,
+        ray_query: !hidden.ray_query && has_rq && frq.ray_query == vk::TRUE,
+        deferred_host_operations: !hidden.deferred_host_operations && has(ash::khr::deferred_host_operations::NAME),
+        swapchain: has(ash::khr::swapchain::NAME),
     };
     let c = Capabilities {
         device_name: props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned(),
@@ -434,7 +551,7 @@ fn probe(
         timestamp_period_ns: if ts_bits > 0 { props.limits.timestamp_period } else { 0.0 },
         max_color_attachments: props.limits.max_color_attachments,
         max_image_dimension_2d: props.limits.max_image_dimension2_d,
-        ray_tracing_hidden: hide_ray_tracing,
+        ray_tracing_hidden: hidden.any(),
         core_1_3: is_13,
     };
     (e, c)
@@ -446,8 +563,12 @@ fn create_device(
     queue_family: u32,
     e: &Extensions,
     caps: &Capabilities,
+    swapchain: bool,
 ) -> Result<ash::Device> {
     let mut names: Vec<*const c_char> = Vec::new();
+    if swapchain {
+        names.push(ash::khr::swapchain::NAME.as_ptr());
+    }
     if e.push_descriptor {
         names.push(ash::khr::push_descriptor::NAME.as_ptr());
     }

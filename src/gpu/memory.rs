@@ -4,9 +4,57 @@
 use super::Context;
 use anyhow::{Context as _, Result, anyhow};
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::{AllocationError, MemoryLocation};
 use std::sync::Arc;
+
+/// An allocation the device had no memory for. The command line recognises it (anywhere in an
+/// error's chain) and suggests a smaller --size.
+#[derive(Debug, thiserror::Error)]
+#[error("out of memory allocating {what}")]
+pub struct OutOfDeviceMemory {
+    /// The buffer or image, with its size.
+    pub what: String,
+    source: AllocationError,
+}
+
+/// What gpu-allocator holds at a moment (the soak test and bench watch it for growth).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct MemoryUsage {
+    /// Bytes of live sub-allocations (buffers and images).
+    pub allocated_bytes: u64,
+    /// Bytes of device memory blocks, used or not.
+    pub capacity_bytes: u64,
+    pub allocations: usize,
+    pub blocks: usize,
+}
+
+impl Context {
+    pub fn memory_usage(&self) -> Result<MemoryUsage> {
+        let report = self.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?.generate_report();
+        Ok(MemoryUsage {
+            allocated_bytes: report.total_allocated_bytes,
+            capacity_bytes: report.total_capacity_bytes,
+            allocations: report.allocations.len(),
+            blocks: report.blocks.len(),
+        })
+    }
+}
+
+/// Allocates memory for `what`. Under a memory cap (`Context::memory_limit`) a request that
+/// would take the live allocations past it fails with gpu-allocator's own out-of-memory error,
+/// so a capped run takes the same path as a full device.
+fn allocate(ctx: &Context, what: impl FnOnce() -> String, desc: &AllocationCreateDesc) -> Result<Allocation> {
+    let mut allocator = ctx.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?;
+    let over_cap = ctx
+        .memory_limit
+        .is_some_and(|limit| allocator.generate_report().total_allocated_bytes + desc.requirements.size > limit);
+    let result = if over_cap { Err(AllocationError::OutOfMemory) } else { allocator.allocate(desc) };
+    result.map_err(|source| match source {
+        AllocationError::OutOfMemory => OutOfDeviceMemory { what: what(), source }.into(),
+        other => anyhow!("cannot allocate memory for {}: {other}", what()),
+    })
+}
 
 pub struct Buffer {
     ctx: Arc<Context>,
@@ -29,19 +77,18 @@ impl Buffer {
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { ctx.device.create_buffer(&info, None) }.with_context(|| format!("create buffer {name}"))?;
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
-        let allocation =
-            ctx.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?.allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
+        let desc = AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        };
+        let allocation = match allocate(ctx, || format!("buffer {name} ({size} bytes)"), &desc) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { ctx.device.destroy_buffer(raw, None) };
-                return Err(anyhow!("out of memory allocating buffer {name} ({size} bytes): {e}"));
+                return Err(e);
             }
         };
         unsafe { ctx.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }?;
@@ -129,19 +176,22 @@ impl Image {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let raw = unsafe { ctx.device.create_image(&info, None) }.with_context(|| format!("create image {name}"))?;
         let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
-        let allocation =
-            ctx.allocator.lock().map_err(|_| anyhow!("allocator lock poisoned"))?.allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
+        let desc = AllocationCreateDesc {
+            name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        };
+        let what = || {
+            let mib = requirements.size as f64 / (1 << 20) as f64;
+            format!("image {name} ({}x{} {format:?}, {mib:.1} MiB)", extent.width, extent.height)
+        };
+        let allocation = match allocate(ctx, what, &desc) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { ctx.device.destroy_image(raw, None) };
-                return Err(anyhow!("out of memory allocating image {name} ({}x{}): {e}", extent.width, extent.height));
+                return Err(e);
             }
         };
         unsafe { ctx.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }?;

@@ -8,9 +8,11 @@ mod context;
 mod descriptors;
 mod memory;
 mod pipeline;
+mod present;
 mod recorder;
 mod sampler;
 pub mod shader;
+mod swapchain;
 mod timestamps;
 pub mod upload;
 mod validation;
@@ -19,11 +21,13 @@ pub use accel_struct::{AccelStruct, BlasBuildStats, BlasGeometry, Tlas, TlasInst
 pub use commands::{CommandPool, image_barrier, memory_barrier};
 pub use context::{Capabilities, Context, ContextOptions};
 pub use descriptors::{Binding, BindingKind, DescriptorSet, DescriptorSetLayout, PushResource};
-pub use memory::{Buffer, Image, aspect_of, texel_size};
+pub use memory::{Buffer, Image, MemoryUsage, OutOfDeviceMemory, aspect_of, texel_size};
 pub use pipeline::{Pipeline, RasterDesc};
+pub use present::{Overlay, Presenter, Screenshot, Shown};
 pub use recorder::Recorder;
 pub use sampler::{Sampler, SamplerDesc};
 pub use shader::ShaderLibrary;
+pub use swapchain::{Swapchain, Target};
 pub use timestamps::TimestampPool;
 pub use validation::ValidationLog;
 

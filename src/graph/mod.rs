@@ -166,9 +166,18 @@ impl Graph {
         }
         for d in &descs {
             for i in &d.inputs {
-                if !map.contains_key(i) {
-                    bail!("frame graph: pass {} reads {i}, which no pass writes", d.name);
+                if map.contains_key(i) {
+                    continue;
                 }
+                let Some(desc) = zero_image(i) else {
+                    bail!("frame graph: pass {} reads {i}, which no pass writes", d.name);
+                };
+                let usage = vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::TRANSFER_DST;
+                let image = Image::new(ctx, i, desc.format, desc.extent.unwrap_or(extent), 1, usage)?;
+                map.insert(i.clone(), (image, desc));
             }
         }
         let timestamps = TimestampPool::new(ctx, (descs.len() as u32 * 2).max(2))?;
@@ -248,6 +257,25 @@ impl Graph {
     pub fn producer(&self, name: &str) -> Option<&str> {
         self.descs.iter().find(|d| d.outputs.iter().any(|o| o.name == name)).map(|d| d.name.as_str())
     }
+}
+
+/// The name of an image that is zero everywhere and written by no pass: a stand-in a pass may read
+/// where the frame plan left out the pass that would have made the real input (for example the
+/// soft-shadow statistics when every light is punctual). `small` makes it 1x1.
+pub fn zero(format: vk::Format, small: bool) -> String {
+    format!("zero.{}{}", format.as_raw(), if small { ".1x1" } else { "" })
+}
+
+/// The description of a `zero(...)` name, if it is one.
+fn zero_image(name: &str) -> Option<OutputDesc> {
+    let rest = name.strip_prefix("zero.")?;
+    let (raw, small) = match rest.strip_suffix(".1x1") {
+        Some(r) => (r, true),
+        None => (rest, false),
+    };
+    let format = vk::Format::from_raw(raw.parse().ok()?);
+    let desc = OutputDesc { name: name.to_string(), format, usage: Usage::Storage, preview: Preview::Scalar, extent: None };
+    Some(if small { desc.with_extent(1, 1) } else { desc })
 }
 
 /// Records a full copy of `image` into a host-visible buffer (the image must have been made

@@ -13,7 +13,8 @@ pub const COLOR: &str = "composite.color";
 
 /// `diffuse`: demodulated diffuse light (gi, denoised or not); `specular`: the specular lobe's
 /// ray-traced light (reflections, denoised or not).
-pub fn new(b: &PassBuilder, diffuse: &str, specular: &str) -> Result<FullscreenPass> {
+/// `visibility`: the shadows chain's output (see shadows::Chain).
+pub fn new(b: &PassBuilder, visibility: &str, diffuse: &str, specular: &str) -> Result<FullscreenPass> {
     let inputs = [
         "gbuffer.depth",
         "gbuffer.normal",
@@ -21,7 +22,7 @@ pub fn new(b: &PassBuilder, diffuse: &str, specular: &str) -> Result<FullscreenP
         "gbuffer.metal_rough",
         "gbuffer.emissive",
         "gbuffer.ids",
-        super::shadows::VISIBILITY,
+        visibility,
         diffuse,
         specular,
     ]

@@ -26,7 +26,8 @@ impl Default for ReflectionSettings {
     }
 }
 
-pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32) -> Result<FullscreenPass> {
+/// `rough_specular`: gi's estimate of the lobe (gi.specular), passed on above the cut-off.
+pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: &str) -> Result<FullscreenPass> {
     let inputs = [
         "gbuffer.depth",
         "gbuffer.normal",
@@ -34,7 +35,7 @@ pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32) -> Result<Fullscr
         "gbuffer.base_color",
         "gbuffer.metal_rough",
         "gbuffer.ids",
-        super::gi::SPECULAR,
+        rough_specular,
     ]
     .map(|n| (n.to_string(), Read::Texel))
     .to_vec();

@@ -5,6 +5,7 @@
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
 
 use super::Settings;
+use super::plan::FramePlan;
 use crate::graph::Pass;
 use crate::passes::{self, PassBuilder, history, inject, svgf};
 use anyhow::Result;
@@ -21,7 +22,7 @@ pub struct HybridFrame {
     pub hdr_output: String,
 }
 
-pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
+pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<HybridFrame> {
     let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(passes::gbuffer::new(b)?)];
     let mut kept = history::gbuffer();
     let mut injected = HashMap::new();
@@ -29,12 +30,27 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
         passes.push(Box::new(passes::primary_rays::new(b)?));
     }
     let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
-    let (shadow_passes, shadow_kept) = passes::shadows::chain(b, &settings.shadows, extent)?;
-    passes.extend(shadow_passes);
-    kept.extend(shadow_kept);
-    passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed, settings.reflections.roughness_cutoff)?));
-    passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed)?));
-    let (mut diffuse, mut specular) = (passes::gi::RADIANCE.to_string(), passes::reflections::RADIANCE.to_string());
+    let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows)?;
+    passes.extend(shadows.passes);
+    kept.extend(shadows.kept);
+    // gi makes the diffuse signal and the rough surfaces' specular one; when the plan drops it
+    // (smooth metals only), both are zero.
+    let (gi_diffuse, gi_specular) = if plan.gi {
+        passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed, settings.reflections.roughness_cutoff)?));
+        (passes::gi::RADIANCE.to_string(), passes::gi::SPECULAR.to_string())
+    } else {
+        let zero = crate::graph::zero(crate::gpu::vk::Format::R32G32B32A32_SFLOAT, false);
+        (zero.clone(), zero)
+    };
+    // Without glossy surfaces, no reflection rays: gi's estimate of the rough lobes is the
+    // specular signal.
+    let mut specular = if plan.reflections {
+        passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed, &gi_specular)?));
+        passes::reflections::RADIANCE.to_string()
+    } else {
+        gi_specular
+    };
+    let mut diffuse = gi_diffuse;
     if settings.denoiser {
         for (signal, input) in [("diffuse", &mut diffuse), ("specular", &mut specular)] {
             let chain = svgf::chain(b, signal, input, &settings.denoise)?;
@@ -52,7 +68,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings) -> Result<HybridFrame> {
         kept.extend(chain.kept);
         injected.insert(name, texels);
     }
-    passes.push(Box::new(passes::composite::new(b, &diffuse, &specular)?));
+    passes.push(Box::new(passes::composite::new(b, shadows.visibility, &diffuse, &specular)?));
     let mut hdr_output = passes::composite::COLOR.to_string();
     if settings.taa {
         passes.push(Box::new(passes::taa::new(b, &hdr_output)?));

@@ -6,6 +6,7 @@ pub mod camera;
 pub mod environment;
 pub mod frame;
 pub mod lights;
+pub mod plan;
 mod mips;
 pub mod ray_batch;
 pub mod scene_gpu;
@@ -39,6 +40,8 @@ pub struct Settings {
     pub start_time: f32,
     /// Add the primary_rays pass (a check of the ray backends against the G-buffer).
     pub primary_rays: bool,
+    /// Run every pass, ignoring the frame plan (see plan.rs).
+    pub full: bool,
     /// Temporal anti-aliasing (jittered G-buffer) before tonemapping.
     pub taa: bool,
     /// Denoise the diffuse and specular signals with SVGF.
@@ -82,6 +85,7 @@ impl Default for Settings {
             frame_dt: 1.0 / 30.0,
             start_time: 0.0,
             primary_rays: false,
+            full: false,
             taa: false,
             denoiser: true,
             denoise: Default::default(),
@@ -99,6 +103,8 @@ impl Default for Settings {
 pub const DISPLAY_OUTPUT: &str = passes::tonemap::COLOR;
 
 pub struct Renderer {
+    /// What the frame leaves out for this scene, and why.
+    pub plan: plan::FramePlan,
     pub ctx: Arc<Context>,
     pool: CommandPool,
     pub scene: Scene,
@@ -118,6 +124,43 @@ pub struct Renderer {
     hdr_output: String,
     /// The next frame starts all temporal histories anew.
     cut_pending: bool,
+    /// A camera set from outside (the viewer), in place of the scene's.
+    view_override: Option<ViewOverride>,
+    /// An animation time set from outside (the viewer's pause and step), in place of the
+    /// frame index's.
+    time_override: Option<f32>,
+}
+
+/// A camera pose and lens set from outside the scene (the viewer's fly and orbit cameras).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewOverride {
+    /// World-to-view (right-handed, looking down -Z).
+    pub view: glam::Mat4,
+    /// Vertical field of view, radians.
+    pub yfov: f32,
+    pub znear: f32,
+    /// May be infinite.
+    pub zfar: f32,
+}
+
+/// The passes of a frame for `settings`, the images the CPU feeds into it and its HDR output.
+type FrameParts = (Vec<Box<dyn Pass>>, std::collections::HashMap<String, passes::inject::Texels>, String);
+
+fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> Result<FrameParts> {
+    Ok(match settings.mode {
+        RenderMode::Hybrid => {
+            let f = frame::hybrid(b, settings, plan)?;
+            (f.passes, f.injected, f.hdr_output)
+        }
+        RenderMode::Reference { seed, max_bounces } => (
+            vec![
+                Box::new(passes::pathtrace::new(b, seed, max_bounces)?),
+                Box::new(passes::tonemap::new(b, passes::pathtrace::COLOR)?),
+            ],
+            Default::default(),
+            passes::pathtrace::COLOR.to_string(),
+        ),
+    })
 }
 
 impl Renderer {
@@ -130,6 +173,14 @@ impl Renderer {
         backend: Backend,
     ) -> Result<Self> {
         crate::accel::sort_triangles_spatially(&mut scene);
+        let plan = if settings.full {
+            plan::FramePlan::full()
+        } else {
+            plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff)
+        };
+        for &i in plan.culled_lights.iter().rev() {
+            scene.lights.remove(i);
+        }
         let limit = ctx.caps.max_image_dimension_2d;
         if settings.width == 0 || settings.height == 0 || settings.width > limit || settings.height > limit {
             bail!(
@@ -144,23 +195,11 @@ impl Renderer {
         let pose = scene.evaluate(settings.start_time);
         let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment)?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
-        let (frame_passes, injected, hdr_output): (Vec<Box<dyn Pass>>, _, String) = match settings.mode {
-            RenderMode::Hybrid => {
-                let f = frame::hybrid(&b, &settings)?;
-                (f.passes, f.injected, f.hdr_output)
-            }
-            RenderMode::Reference { seed, max_bounces } => (
-                vec![
-                    Box::new(passes::pathtrace::new(&b, seed, max_bounces)?),
-                    Box::new(passes::tonemap::new(&b, passes::pathtrace::COLOR)?),
-                ],
-                Default::default(),
-                passes::pathtrace::COLOR.to_string(),
-            ),
-        };
+        let (frame_passes, injected, hdr_output) = frame_parts(&b, &settings, &plan)?;
         let extent = vk::Extent2D { width: settings.width, height: settings.height };
         let graph = Graph::new(ctx, frame_passes, extent)?;
         Ok(Self {
+            plan,
             ctx: ctx.clone(),
             pool,
             scene,
@@ -176,10 +215,60 @@ impl Renderer {
             injected,
             hdr_output,
             cut_pending: false,
+            view_override: None,
+            time_override: None,
         })
     }
 
+    /// Rebuilds the frame's passes (pipelines and images) from `shaders` and `self.settings`,
+    /// keeping the scene on the GPU: the viewer's settings changes, resizes and shader hot
+    /// reload. On error the old frame stays as it was. Temporal histories start anew.
+    pub fn rebuild_frame(&mut self, shaders: &ShaderLibrary) -> Result<()> {
+        let s = &self.settings;
+        let limit = self.ctx.caps.max_image_dimension_2d;
+        if s.width == 0 || s.height == 0 || s.width > limit || s.height > limit {
+            bail!("image size {}x{} is outside what the device supports (1..={limit} per side)", s.width, s.height);
+        }
+        let b = PassBuilder { ctx: &self.ctx, shaders, scene: &self.scene_gpu };
+        let (frame_passes, injected, hdr_output) = frame_parts(&b, s, &self.plan)?;
+        let extent = vk::Extent2D { width: s.width, height: s.height };
+        self.graph = Graph::new(&self.ctx, frame_passes, extent)?;
+        self.injected = injected;
+        self.hdr_output = hdr_output;
+        self.last_pass_times.clear();
+        self.camera_cut();
+        Ok(())
+    }
+
+    /// Replaces the scene's camera by `view` from the next frame on (`None`: the scene's
+    /// camera again).
+    pub fn set_view_override(&mut self, view: Option<ViewOverride>) {
+        self.view_override = view;
+    }
+
+    /// Shows the scene through another of its cameras (a camera cut).
+    pub fn set_camera(&mut self, choice: &CameraChoice) -> Result<()> {
+        self.camera = camera::resolve(&self.scene, choice)?;
+        self.view_override = None;
+        self.camera_cut();
+        Ok(())
+    }
+
+    /// The scene camera in use (`None`: the framing camera of a scene without cameras).
+    pub fn camera_index(&self) -> Option<usize> {
+        self.camera
+    }
+
+    /// Fixes the animation time of the next frames (`None`: the time follows the frame index,
+    /// `start_time + frame * frame_dt`).
+    pub fn set_time(&mut self, time: Option<f32>) {
+        self.time_override = time;
+    }
+
     pub fn time_of(&self, frame: u32) -> f32 {
+        if let Some(t) = self.time_override {
+            return t;
+        }
         if let RenderMode::Reference { .. } = self.settings.mode {
             // Every sample of a reference must see the same scene.
             return self.settings.start_time;
@@ -210,6 +299,10 @@ impl Renderer {
 
     pub fn view_of(&self, pose: &Pose) -> View {
         let aspect = self.settings.width as f32 / self.settings.height as f32;
+        if let Some(o) = self.view_override {
+            let position = o.view.inverse().w_axis.truncate();
+            return camera::perspective(o.view, position, o.yfov, aspect, o.znear, o.zfar);
+        }
         camera::view_at(&self.scene, self.camera, pose, aspect)
     }
 

@@ -11,8 +11,8 @@
 //! depth first, each node's two children adjacent, boxes quantised.
 
 use super::layout::{
-    BlasPool, BvhInstance, ChildRef, INSTANCE_ROWS, InstanceDesc, MAX_LEAF_SIZE, MAX_ROWS, MeshBvh, NODE_ROWS,
-    NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas, child_rows, triangle_rows,
+    BlasPool, BvhInstance, ChildRef, INSTANCE_ROWS, InstanceDesc, MAX_LEAF_SIZE, MAX_ROWS, MESH_DEPTH, MeshBvh,
+    NODE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas, child_rows, triangle_rows,
 };
 use glam::{UVec3, Vec3, Vec3A, Vec4};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -27,12 +27,6 @@ pub const BINS: usize = 16;
 /// row offset.
 const MAX_PRIMITIVES: u32 = MAX_ROWS / TRIANGLE_ROWS;
 
-/// Nodes deeper than this use median splits, which halve the primitive count, so even a
-/// degenerate input whose SAH splits peel off one primitive at a time yields a tree at most
-/// `SAH_DEPTH + 27` inner levels deep (27 = log2 of [`MAX_PRIMITIVES`], rounded up), within
-/// [`STACK_SIZE`].
-const SAH_DEPTH: u32 = (STACK_SIZE as u32) - (32 - MAX_PRIMITIVES.leading_zeros()) - 1;
-
 /// Subtrees with fewer primitives are built on the current thread: below this, spawning
 /// costs more than it saves.
 const PARALLEL_MIN: usize = 16 * 1024;
@@ -46,6 +40,11 @@ pub struct BuildOptions {
     pub traversal_cost: f32,
     /// Threads to build with; 0 = all available cores.
     pub threads: usize,
+    /// Most inner levels the tree may have. Nodes `max_depth - log2(n)` levels down (n
+    /// primitives, log rounded up) and deeper use median splits, which halve the primitive
+    /// count, so even a degenerate input whose SAH splits peel off one primitive at a time
+    /// stays within it.
+    pub max_depth: u32,
 }
 
 impl BuildOptions {
@@ -54,11 +53,12 @@ impl BuildOptions {
     /// costs 1, 1.5 and 2 traced at the same rate within noise while 1.5 has 29% fewer nodes
     /// than 1 (faster build, smaller buffers); SAH-chosen leaves then average ~2.4 triangles.
     /// The cap of 8 bounds the leaf loop's length (warp divergence on the GPU).
-    pub const MESH: Self = Self { max_leaf_size: 8, traversal_cost: 1.5, threads: 0 };
+    pub const MESH: Self = Self { max_leaf_size: 8, traversal_cost: 1.5, threads: 0, max_depth: MESH_DEPTH };
     /// Top level (instances): entering an instance costs a ray transform plus a root fetch,
     /// far more than a box test, so every instance gets its own leaf box (and the layout
     /// needs it: a top-level leaf is one instance record).
-    pub const INSTANCES: Self = Self { max_leaf_size: 1, traversal_cost: 1.0, threads: 1 };
+    /// [`Tlas::build`] gives it the depth the meshes leave.
+    pub const INSTANCES: Self = Self { max_leaf_size: 1, traversal_cost: 1.0, threads: 1, max_depth: MESH_DEPTH };
 }
 
 impl Default for BuildOptions {
@@ -201,7 +201,15 @@ fn build_tree(mut prims: Vec<Primitive>, options: &BuildOptions) -> Tree {
     };
     // Two levels of tasks more than cores so that uneven SAH splits still keep all cores busy.
     let spawn_depth = if threads > 1 { threads.next_power_of_two().trailing_zeros() + 2 } else { 0 };
-    let builder = Builder { options, spawn_depth };
+    let median_levels = prims.len().next_power_of_two().trailing_zeros();
+    assert!(
+        median_levels <= options.max_depth,
+        "{} primitives need more than {} levels",
+        prims.len(),
+        options.max_depth
+    );
+    let sah_depth = options.max_depth - median_levels;
+    let builder = Builder { options, spawn_depth, sah_depth };
     let extent = Extent::of(&prims);
     // A tree of n primitives has at most n - 1 inner nodes; reserving that much avoids
     // regrowing, and pages never written cost nothing.
@@ -214,15 +222,15 @@ fn build_tree(mut prims: Vec<Primitive>, options: &BuildOptions) -> Tree {
 /// record is followed, eventually, by its two children's records side by side (child A's
 /// subtree first), so a node names both with one offset. `leaf_rows` rows per primitive;
 /// `write_leaf(records, first, count)` fills a leaf's records for `order[first..first +
-/// count]`. Returns the rows and the root's reference.
+/// count]`. Returns the rows, the root's reference and the tree's depth (inner levels).
 fn pack(
     tree: &Tree,
     mut rows: Vec<Row>,
     leaf_rows: u32,
     mut write_leaf: impl FnMut(&mut [Row], u32, u32),
-) -> (Vec<Row>, ChildRef) {
+) -> (Vec<Row>, ChildRef, u32) {
     let Some(root) = tree.root else {
-        return (rows, ChildRef::NONE);
+        return (rows, ChildRef::NONE, 0);
     };
     // Appends room for a child's record(s) and returns its reference.
     let reserve = |rows: &mut Vec<Row>, child: Child| {
@@ -234,8 +242,10 @@ fn pack(
         }
     };
     let root_ref = reserve(&mut rows, root);
-    let mut todo = vec![(root, root_ref)];
-    while let Some((child, at)) = todo.pop() {
+    let mut depth = 0;
+    // (child, its reference, inner levels above it)
+    let mut todo = vec![(root, root_ref, 0)];
+    while let Some((child, at, level)) = todo.pop() {
         let start = at.offset() as usize;
         match child {
             Child::Leaf { first, count } => {
@@ -249,17 +259,20 @@ fn pack(
                     a_ref.offset(),
                 );
                 rows[start..start + NODE_ROWS as usize].copy_from_slice(&node.0);
+                depth = depth.max(level + 1);
                 // Child A's subtree is laid out first (popped first), then B's.
-                todo.extend([(b, b_ref), (a, a_ref)]);
+                todo.extend([(b, b_ref, level + 1), (a, a_ref, level + 1)]);
             }
         }
     }
-    (rows, root_ref)
+    (rows, root_ref, depth)
 }
 
 struct Builder<'a> {
     options: &'a BuildOptions,
     spawn_depth: u32,
+    /// Nodes at this depth and deeper split at the median (see [`BuildOptions::max_depth`]).
+    sah_depth: u32,
 }
 
 /// A chosen SAH split: primitives whose centroid bin on `axis` is below `bin` go left.
@@ -306,7 +319,7 @@ impl Builder<'_> {
     /// returns it; inner nodes are appended to `out` depth-first.
     fn node(&self, prims: &mut [Primitive], first: u32, depth: u32, extent: Extent, out: &mut Vec<BuildNode>) -> Child {
         let n = prims.len();
-        let split = if depth < SAH_DEPTH { self.find_split(prims, &extent) } else { None };
+        let split = if depth < self.sah_depth { self.find_split(prims, &extent) } else { None };
         if n <= self.options.max_leaf_size as usize {
             let area = extent.bounds.half_area();
             let leaf_cost = n as f32 * area;
@@ -454,7 +467,7 @@ impl MeshBvh {
         }
         let triangle_count = prims.len() as u32;
         let tree = build_tree(prims, options);
-        let (rows, root) = pack(&tree, Vec::new(), TRIANGLE_ROWS, |records, first, count| {
+        let (rows, root, depth) = pack(&tree, Vec::new(), TRIANGLE_ROWS, |records, first, count| {
             for (i, &t) in tree.order[first as usize..(first + count) as usize].iter().enumerate() {
                 let v = triangle(t as usize).expect("validated above");
                 records[i * 3..i * 3 + 3].copy_from_slice(&triangle_rows(t, v));
@@ -465,7 +478,7 @@ impl MeshBvh {
         } else {
             (tree.bounds.lo.into(), tree.bounds.hi.into())
         };
-        Self { rows, root, triangle_count, bounds_min, bounds_max }
+        Self { rows, root, triangle_count, depth, bounds_min, bounds_max }
     }
 }
 
@@ -524,15 +537,28 @@ impl Tlas {
             prims.push(Primitive::new(world.lo, world.hi, descs.len() as u32));
             descs.push(*desc);
         }
-        let tree = build_tree(prims, &BuildOptions::INSTANCES);
+        // The traversal stack holds the top level's entries below the deepest mesh's.
+        let mesh_depth = descs.iter().map(|d| blas.meshes[d.mesh as usize].depth).max().unwrap_or(0);
+        let max_depth = STACK_SIZE as u32 - mesh_depth;
+        let tree = build_tree(prims, &BuildOptions { max_depth, ..BuildOptions::INSTANCES });
         let mut instances = Vec::with_capacity(descs.len());
-        let (mut rows, root) = pack(&tree, vec![[0; 4]], INSTANCE_ROWS, |record, first, _| {
+        let (mut rows, root, depth) = pack(&tree, vec![[0; 4]], INSTANCE_ROWS, |record, first, _| {
             let desc = descs[tree.order[first as usize] as usize];
             record.copy_from_slice(&BvhInstance::new(&desc, &blas.meshes[desc.mesh as usize]).to_rows());
             instances.push(desc);
         });
         rows[0][0] = root.0;
-        Self { rows, instances }
+        debug_assert!(root == ChildRef::NONE || root.offset() == 1, "the root record follows row 0");
+        if root.is_leaf() {
+            // One instance: its mesh's root node record is copied to row 5 too, so the shader
+            // reads it, like the top level's root, from a constant address.
+            let mesh = &blas.meshes[instances[0].mesh as usize];
+            if !mesh.root.is_leaf() {
+                let at = (mesh.base + mesh.root.offset()) as usize;
+                rows.extend_from_slice(&blas.rows[at..at + NODE_ROWS as usize]);
+            }
+        }
+        Self { rows, depth, instances }
     }
 }
 
@@ -560,7 +586,7 @@ pub(crate) mod tests {
         // (reference, inner depth, the boxes on the way down)
         let mut stack = vec![(mesh.root, 0u32, vec![root_box])];
         while let Some((r, depth, boxes)) = stack.pop() {
-            assert!(depth as usize <= STACK_SIZE);
+            assert!(depth <= MESH_DEPTH);
             let at = r.offset() as usize;
             let area = boxes.last().expect("root box").half_area() as f64 / root_area;
             if r.is_leaf() {
@@ -688,6 +714,28 @@ pub(crate) mod tests {
         assert_eq!((one.root, &one.rows), (four.root, &four.rows));
         let (cost, depth, _) = check_tree(&four, 8);
         assert!(cost > 0.0 && depth < 40, "cost {cost} depth {depth}");
+    }
+
+    #[test]
+    fn depth_limits_hold() {
+        // Median splits take over where SAH would go too deep, even for one copy of a
+        // triangle per position along a line (SAH peels one off at a time).
+        let positions: Vec<Vec3> =
+            (0..3000).map(|i| Vec3::new((i / 3) as f32 * (i as f32).sqrt(), 0.0, (i % 3) as f32)).collect();
+        let indices: Vec<u32> = (0..3000).collect();
+        for max_depth in [11, 12, 20] {
+            let bvh = MeshBvh::build(
+                &positions,
+                &indices,
+                &BuildOptions { max_depth, max_leaf_size: 1, ..BuildOptions::MESH },
+            );
+            let (_, depth, _) = check_tree(&bvh, 1);
+            assert!(
+                depth <= max_depth && depth == bvh.depth,
+                "limit {max_depth}: depth {depth}, recorded {}",
+                bvh.depth
+            );
+        }
     }
 
     #[test]

@@ -14,9 +14,14 @@ use glam::{Affine3A, Vec3, Vec3A};
 /// One `uvec4` of the packed buffer.
 pub type Row = [u32; 4];
 
-/// Deepest traversal stack either level can need. The builder switches to median splits past
-/// [`super::build`]'s SAH depth limit so no tree is deeper than this many inner levels.
+/// Entries of the traversal stack, which both levels share: a tree pushes at most one entry
+/// per inner level on the way down, so the builder keeps the top level's depth plus the
+/// deepest mesh's within this. Small, because lavapipe zero-fills the whole stack of every
+/// 8 invocations before they start (8 bytes an entry and invocation).
 pub const STACK_SIZE: usize = 64;
+/// Most inner levels a mesh's tree has; the top level gets what is left of [`STACK_SIZE`]
+/// (at least 20 levels, so at least 2^19 instances).
+pub const MESH_DEPTH: u32 = 44;
 
 /// Bit position of a child reference's kind (see [`ChildRef`]).
 pub const KIND_SHIFT: u32 = 28;
@@ -36,6 +41,10 @@ pub const INSTANCE_ROWS: u32 = 4;
 /// Instance flag: the instance's material is alpha-tested, so candidate hits go through the
 /// alpha callback (in GLSL: the shader's alpha test) before they are accepted.
 pub const INSTANCE_ALPHA_TESTED: u32 = 1;
+/// Instance flag: `world_to_object` only translates (its 3x3 part is exactly the identity),
+/// so the shader moves the ray's origin and keeps the rest of it. The results equal the full
+/// transform's: multiplying by exact ones and zeros rounds nothing.
+pub const INSTANCE_TRANSLATED: u32 = 2;
 
 /// A child reference: `kind << 28 | offset`. Kind 0 is an inner node whose record starts
 /// `offset` rows into the tree; kind `n` in 1..=14 is a leaf of `n` triangle records (bottom
@@ -59,7 +68,7 @@ impl ChildRef {
     }
 
     pub fn is_leaf(self) -> bool {
-        self.kind() != 0
+        self.kind() != 0 && self != Self::NONE
     }
 
     /// 0 for an inner node, else the leaf's primitive count.
@@ -193,15 +202,18 @@ pub struct BvhInstance {
     /// The instance id reported in hits (`gl_RayQueryGetIntersectionInstanceCustomIndexEXT`).
     pub custom_index: u32,
     /// Bits 0..7: the instance is skipped when `mask & ray_mask == 0`; bit 8 and up: flags
-    /// ([`INSTANCE_ALPHA_TESTED`]).
+    /// ([`INSTANCE_ALPHA_TESTED`], [`INSTANCE_TRANSLATED`]).
     pub mask_flags: u32,
 }
 
 impl BvhInstance {
     pub fn new(desc: &InstanceDesc, mesh: &MeshRange) -> Self {
-        let flags = if desc.alpha_tested { INSTANCE_ALPHA_TESTED } else { 0 };
+        let world_to_object = rows(&desc.object_to_world.inverse());
+        let identity = (0..3).all(|r| (0..3).all(|c| world_to_object[r][c] == if r == c { 1.0 } else { 0.0 }));
+        let flags =
+            if desc.alpha_tested { INSTANCE_ALPHA_TESTED } else { 0 } | if identity { INSTANCE_TRANSLATED } else { 0 };
         Self {
-            world_to_object: rows(&desc.object_to_world.inverse()),
+            world_to_object,
             mesh_base: mesh.base,
             root: mesh.root.0,
             custom_index: desc.custom_index,
@@ -268,6 +280,8 @@ pub struct MeshBvh {
     /// [`ChildRef::NONE`] for a mesh without triangles; a leaf for one small enough.
     pub root: ChildRef,
     pub triangle_count: u32,
+    /// Inner levels on the longest path from the root (0 when the root is a leaf).
+    pub depth: u32,
     /// Mesh-local bounds of the triangles in the tree (empty box when there are none).
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
@@ -280,6 +294,7 @@ pub struct MeshRange {
     pub root: ChildRef,
     pub rows: u32,
     pub triangle_count: u32,
+    pub depth: u32,
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
 }
@@ -301,6 +316,7 @@ impl BlasPool {
             root: mesh.root,
             rows: offset(mesh.rows.len()),
             triangle_count: mesh.triangle_count,
+            depth: mesh.depth,
             bounds_min: mesh.bounds_min,
             bounds_max: mesh.bounds_max,
         };
@@ -360,18 +376,22 @@ pub fn leaves(rows: &[Row], root: ChildRef, leaf_rows: u32) -> Vec<ChildRef> {
 }
 
 /// The top level: row 0 holds the root reference (and, on the GPU, where the bottom levels
-/// start); node and instance records follow, references relative to row 0. Rebuilt whenever
-/// instances move; its size grows with instances, not triangles.
+/// start); node and instance records follow, references relative to row 0, the root's record
+/// first (at row 1). A top level of one instance also holds a copy of its mesh's root node
+/// record at row 5. Rebuilt whenever instances move; its size grows with instances, not
+/// triangles.
 #[derive(Clone, Debug)]
 pub struct Tlas {
     pub rows: Vec<Row>,
+    /// Inner levels on the longest path from the root.
+    pub depth: u32,
     /// The instances in the tree, in leaf (record) order.
     pub instances: Vec<InstanceDesc>,
 }
 
 impl Default for Tlas {
     fn default() -> Self {
-        Self { rows: vec![[ChildRef::NONE.0, 0, 0, 0]], instances: Vec::new() }
+        Self { rows: vec![[ChildRef::NONE.0, 0, 0, 0]], depth: 0, instances: Vec::new() }
     }
 }
 
@@ -381,9 +401,9 @@ impl Tlas {
     }
 
     /// Rows the top level of `instances` instances can take: row 0, fewer than n inner
-    /// nodes and n instance records.
+    /// nodes (or, for one instance, the copied mesh root) and n instance records.
     pub fn rows_for(instances: usize) -> usize {
-        1 + instances * (NODE_ROWS + INSTANCE_ROWS) as usize
+        1 + instances.max(1) * (NODE_ROWS + INSTANCE_ROWS) as usize
     }
 }
 
@@ -408,7 +428,7 @@ mod tests {
     #[test]
     fn child_refs_round_trip() {
         let leaf = ChildRef::leaf(MAX_ROWS - 1, MAX_LEAF_SIZE);
-        assert!(leaf.is_leaf() && leaf != ChildRef::NONE);
+        assert!(leaf.is_leaf() && !ChildRef::NONE.is_leaf());
         assert_eq!((leaf.offset(), leaf.kind()), (MAX_ROWS - 1, MAX_LEAF_SIZE));
         let inner = ChildRef::inner(12345);
         assert!(!inner.is_leaf());

@@ -12,7 +12,9 @@
 //!
 //! ```text
 //! row 0                  (top-level root reference, first row of the bottom levels, 0, 0)
-//! rows 1..               top-level node and instance records; references relative to row 0
+//! rows 1..               top-level node and instance records, the root's first; references
+//!                        relative to row 0 (one instance: a copy of its mesh's root node
+//!                        record follows it, at row 5)
 //! rows blas_base..       every mesh's node and triangle records; references relative to
 //!                        the mesh's first row (its instances' mesh_base)
 //!
@@ -44,8 +46,8 @@ pub mod traverse;
 
 pub use build::{BINS, BuildOptions};
 pub use layout::{
-    BlasPool, BvhInstance, ChildRef, INSTANCE_ALPHA_TESTED, INSTANCE_ROWS, InstanceDesc, KIND_SHIFT, MAX_LEAF_SIZE,
-    MeshBvh, MeshRange, NODE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas,
+    BlasPool, BvhInstance, ChildRef, INSTANCE_ALPHA_TESTED, INSTANCE_ROWS, INSTANCE_TRANSLATED, InstanceDesc,
+    KIND_SHIFT, MAX_LEAF_SIZE, MeshBvh, MeshRange, NODE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas,
 };
 pub use morton::morton_order;
 pub use scene_bvh::instance_descs;

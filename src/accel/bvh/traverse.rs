@@ -12,8 +12,8 @@
 //! - **Instances**: a top-level leaf transforms the ray by the instance's world-to-object rows
 //!   without normalising the direction, so `t` means the same in both spaces, and walks the
 //!   mesh's tree on the same stack, above the top level's entries. Instances whose mask
-//!   shares no bit with the ray's are skipped. Each level pushes at most [`STACK_SIZE`]
-//!   entries.
+//!   shares no bit with the ray's are skipped. A tree pushes at most one entry per inner
+//!   level, and the builder keeps both levels' depths within [`STACK_SIZE`] together.
 //! - **Triangles**: watertight test of Woop, Benthin and Wald 2013: translate the vertices to
 //!   the ray origin, permute so the direction's largest component is z (swapping x and y when
 //!   that component is negative, to keep the winding), shear so the ray runs along +z, then
@@ -179,20 +179,16 @@ impl RaySpace {
     }
 }
 
-/// Entries of the one traversal stack both levels share: each tree pushes at most one entry
-/// per inner level.
-const TRAVERSAL_STACK: usize = 2 * STACK_SIZE;
-
 /// Fixed-size stack of (reference, entry distance), as in the shader.
 struct Stack {
-    refs: [u32; TRAVERSAL_STACK],
-    dist: [f32; TRAVERSAL_STACK],
+    refs: [u32; STACK_SIZE],
+    dist: [f32; STACK_SIZE],
     len: usize,
 }
 
 impl Stack {
     fn new() -> Self {
-        Self { refs: [0; TRAVERSAL_STACK], dist: [0.0; TRAVERSAL_STACK], len: 0 }
+        Self { refs: [0; STACK_SIZE], dist: [0.0; STACK_SIZE], len: 0 }
     }
 
     fn push(&mut self, r: ChildRef, t: f32) {
@@ -608,6 +604,18 @@ pub(crate) mod tests {
         assert!(closest_hit(&bvh, o, d, 0.0, 0.5, 0xFF, accept_all).is_none());
         // Inclusive ends: a hit exactly at tmax counts.
         assert!(any_hit(&bvh, o, d, 0.0, 1.0, 0xFF, accept_all));
+    }
+
+    #[test]
+    fn one_instance_top_level_copies_the_mesh_root() {
+        // The shader reads the first node every ray visits from row 5 of the top level.
+        let (p, i) = icosphere(2);
+        let bvh = single_mesh(&p, &i);
+        let mesh = &bvh.blas.meshes[0];
+        let at = (mesh.base + mesh.root.offset()) as usize;
+        assert!(!mesh.root.is_leaf());
+        assert_eq!(bvh.tlas.root(), ChildRef::leaf(1, 1));
+        assert_eq!(&bvh.tlas.rows[5..7], &bvh.blas.rows[at..at + 2]);
     }
 
     #[test]

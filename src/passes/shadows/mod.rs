@@ -21,8 +21,11 @@ use crate::graph::{Pass, Preview};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-/// The visibility the lighting reads: one channel per light (the first four).
+/// The visibility the lighting reads when some light is soft: one channel per light (the first
+/// four). With punctual lights only, the chain is the trace pass alone and its `ring0` is read.
 pub const VISIBILITY: &str = "shadows_filter.visibility";
+/// The visibility of a chain without soft lights (see [`Chain::visibility`]).
+pub const HARD_VISIBILITY: &str = "shadows.ring0";
 /// Lights beyond this many are shaded without shadows.
 pub const MAX_SHADOWED_LIGHTS: usize = 4;
 
@@ -78,11 +81,25 @@ impl ShadowSettings {
 
 const RING: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
-/// The chain's passes and what it keeps for the next frame.
-pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D) -> Result<(Vec<Box<dyn Pass>>, Vec<Kept>)> {
+/// A built chain.
+pub struct Chain {
+    pub passes: Vec<Box<dyn Pass>>,
+    /// What the next frame needs from this one.
+    pub kept: Vec<Kept>,
+    /// The name of the visibility the lighting reads.
+    pub visibility: &'static str,
+}
+
+/// The chain's passes. With `soft` false (every light punctual, the frame plan's call) only the
+/// trace pass runs: one hard-shadow ray per light, nothing kept, nothing filtered.
+pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bool) -> Result<Chain> {
     let pixels = extent.width * extent.height;
+    if !soft {
+        let trace = trace::new(b, s.push_constants(pixels, 0), false)?;
+        return Ok(Chain { passes: vec![Box::new(trace)], kept: Vec::new(), visibility: HARD_VISIBILITY });
+    }
     let passes: Vec<Box<dyn Pass>> = vec![
-        Box::new(trace::new(b, s.push_constants(pixels, 0))?),
+        Box::new(trace::new(b, s.push_constants(pixels, 0), true)?),
         Box::new(penumbra::new(b, s.push_constants(pixels, 0))?),
         Box::new(tent::new(b, 0, s.push_constants(pixels, 0))?),
         Box::new(tent::new(b, 1, s.push_constants(pixels, 1))?),
@@ -97,5 +114,5 @@ pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D) -> Resul
         Kept::new("shadows_filter.dv", RING, Preview::Scalar),
         Kept::new("shadows_filter.budget", vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
     ];
-    Ok((passes, kept))
+    Ok(Chain { passes, kept, visibility: VISIBILITY })
 }

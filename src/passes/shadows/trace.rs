@@ -2,7 +2,8 @@
 //! (shaders-glsl/shadows.comp).
 
 use super::RING;
-use crate::graph::{OutputDesc, Preview};
+use crate::gpu::vk;
+use crate::graph::{self, OutputDesc, Preview};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Read};
 use crate::passes::history;
@@ -10,20 +11,25 @@ use anyhow::Result;
 
 pub const NAME: &str = "shadows";
 
-pub fn new(b: &PassBuilder, push: Vec<u8>) -> Result<FullscreenPass> {
+/// `soft`: some light has a radius, so the pass reads its history (the ring, counts, the
+/// filter's statistics); otherwise every history input is a zero image nobody writes: hard
+/// lights use none of it.
+pub fn new(b: &PassBuilder, push: Vec<u8>, soft: bool) -> Result<FullscreenPass> {
+    let prev = |name: &str| if soft { history::of(name) } else { graph::zero(RING, false) };
+    let budget = if soft { history::of("shadows_filter.budget") } else { graph::zero(vk::Format::R32_UINT, true) };
     let inputs = [
         "gbuffer.depth".to_string(),
         "gbuffer.normal_geo".into(),
         "gbuffer.ids".into(),
         "gbuffer.motion".into(),
         history::of("gbuffer.depth"),
-        history::of("shadows.ring0"),
-        history::of("shadows.ring1"),
-        history::of("shadows.ring2"),
-        history::of("shadows.sample_count"),
-        history::of("shadows.stable"),
-        history::of("shadows_filter.dv"),
-        history::of("shadows_filter.budget"),
+        prev("shadows.ring0"),
+        prev("shadows.ring1"),
+        prev("shadows.ring2"),
+        prev("shadows.sample_count"),
+        prev("shadows.stable"),
+        prev("shadows_filter.dv"),
+        budget,
     ]
     .map(|n| (n, Read::Texel))
     .to_vec();

@@ -1,0 +1,750 @@
+//! `hybrid-rt view`: the desktop viewer. A winit window with a Vulkan swapchain shows the
+//! hybrid frame, or any named pass output full screen (the capture's names and PNG preview
+//! mapping), under an egui overlay with per-pass GPU times, the backend and why, and the
+//! tunables. A fly/orbit camera, the scene's cameras and animation control drive the renderer;
+//! shaders-glsl is watched and hot-reloaded, keeping the old pipelines when a compile fails.
+//!
+//! One frame is in flight: `Renderer::render_frame` waits for its frame, then the chosen
+//! output is drawn into the swapchain with the overlay on top (see gpu::present).
+//! Scripts (`--script`, see [`script`]) make runs reproducible for tests.
+
+mod camera;
+mod hot_reload;
+pub mod script;
+mod tunables;
+mod ui;
+
+use crate::backend::{self, Backend, BackendChoice};
+use crate::capture::{self, Capture};
+use crate::gpu::{Context, ContextOptions, Overlay, Presenter, ShaderLibrary, Shown, Swapchain, vk};
+use crate::graph::Preview;
+use crate::image_io;
+use crate::render::{CameraChoice, Renderer, Settings};
+use crate::scene::Scene;
+use anyhow::{Context as _, Result, anyhow, bail};
+use camera::{Controller, Mode};
+use glam::Vec3;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use script::Command;
+use std::collections::{HashSet, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+/// How the viewer starts.
+pub struct ViewOptions {
+    pub scene: Scene,
+    /// The render size, and the window's first size.
+    pub settings: Settings,
+    pub backend: BackendChoice,
+    pub validate: bool,
+    pub camera: CameraChoice,
+    /// Shaders compiled from here at start-up (else the embedded ones).
+    pub shader_dir: Option<PathBuf>,
+    /// The folder hot reload watches (`None`: no hot reload).
+    pub watch: Option<PathBuf>,
+    /// Run these commands, then stay interactive unless one was `quit`.
+    pub script: Option<Vec<Command>>,
+    pub vsync: bool,
+    /// The output shown first.
+    pub view: String,
+    pub ui: bool,
+    /// Where screenshots and capture dumps go when no path is given.
+    pub out_dir: PathBuf,
+    pub force: bool,
+}
+
+/// Opens the window and runs until it is closed or a script quits.
+pub fn run(opts: ViewOptions) -> Result<()> {
+    let event_loop =
+        EventLoop::new().map_err(|e| anyhow!("cannot open a window: {e} (is DISPLAY set and an X server running?)"))?;
+    let mut app = App { opts: Some(opts), viewer: None, result: Ok(()) };
+    event_loop.run_app(&mut app).map_err(|e| anyhow!("window event loop: {e}"))?;
+    let App { viewer, result, .. } = app;
+    let ctx = viewer.as_ref().map(|v| v.ctx.clone());
+    // Everything made from the context goes before the context's last reference, so teardown
+    // (and the validation layer's leak check) happens in finish_validation.
+    drop(viewer);
+    result?;
+    match ctx {
+        Some(ctx) => crate::cli::finish_validation(ctx),
+        None => Ok(()),
+    }
+}
+
+struct App {
+    opts: Option<ViewOptions>,
+    viewer: Option<Viewer>,
+    result: Result<()>,
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        if self.result.is_ok() {
+            self.result = Err(e);
+        }
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(opts) = self.opts.take() else { return };
+        match Viewer::new(event_loop, opts) {
+            Ok(v) => self.viewer = Some(v),
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(v) = self.viewer.as_mut() else { return };
+        match v.window_event(event) {
+            Ok(true) => {}
+            Ok(false) => event_loop.exit(),
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(v) = &self.viewer else { return };
+        // Draw continuously (temporal passes converge, animations play); a minimised window
+        // sleeps until an event.
+        if v.swapchain.visible() {
+            event_loop.set_control_flow(ControlFlow::Poll);
+            v.window.request_redraw();
+        } else {
+            event_loop.set_control_flow(ControlFlow::Wait);
+        }
+    }
+}
+
+/// Keys and buttons held, and mouse movement since the last frame.
+#[derive(Default)]
+struct Input {
+    keys: HashSet<KeyCode>,
+    /// Keys pressed since the last frame: a tap shorter than a slow frame still moves.
+    tapped: HashSet<KeyCode>,
+    buttons: HashSet<MouseButton>,
+    cursor: Option<(f64, f64)>,
+    /// Movement while the left / the right or middle button was held, pixels.
+    drag_left: (f32, f32),
+    drag_right: (f32, f32),
+    wheel: f32,
+}
+
+/// Animation time: `start_time + steps * frame_dt`, the renderer's own formula, so a viewer
+/// that plays from the start sees exactly the times `render` sees.
+struct Clock {
+    playing: bool,
+    steps: u32,
+}
+
+impl Clock {
+    fn time(&self, s: &Settings) -> f32 {
+        s.start_time + self.steps as f32 * s.frame_dt
+    }
+}
+
+// Fields drop in this order: what draws into the window goes before the window, and
+// everything made from the context before the context.
+struct Viewer {
+    presenter: Presenter,
+    swapchain: Swapchain,
+    renderer: Renderer,
+    egui_state: egui_winit::State,
+    egui: egui::Context,
+    window: Window,
+    shaders: ShaderLibrary,
+    watcher: Option<hot_reload::Watcher>,
+    ctx: Arc<Context>,
+    backend: Backend,
+    backend_why: String,
+    camera: Controller,
+    cameras: Vec<String>,
+    clock: Clock,
+    /// The overlay's copy of the settings, applied when it differs from the renderer's.
+    edit: Settings,
+    view: String,
+    ui_visible: bool,
+    script: Option<VecDeque<Command>>,
+    frames_left: u32,
+    input: Input,
+    out_dir: PathBuf,
+    force: bool,
+    message: String,
+    shader_error: Option<String>,
+    pending_screenshot: Option<PathBuf>,
+    frame_ms: f32,
+    last_frame: Instant,
+    /// When the window was last resized: the render size follows once it settles.
+    resized_at: Option<Instant>,
+}
+
+impl Viewer {
+    fn new(event_loop: &ActiveEventLoop, opts: ViewOptions) -> Result<Self> {
+        let (w, h) = (opts.settings.width, opts.settings.height);
+        let attributes = Window::default_attributes()
+            .with_title(format!("hybrid-rt — {}", opts.scene.name))
+            .with_inner_size(winit::dpi::PhysicalSize::new(w, h));
+        let window = event_loop.create_window(attributes).context("create the window")?;
+        let display = window.display_handle().map_err(|e| anyhow!("window display handle: {e}"))?.as_raw();
+        let handle = window.window_handle().map_err(|e| anyhow!("window handle: {e}"))?.as_raw();
+        let shaders = match &opts.shader_dir {
+            Some(dir) => ShaderLibrary::from_dir(dir)?,
+            None => ShaderLibrary::embedded(),
+        };
+        let ctx =
+            Context::new(&ContextOptions { validate: opts.validate, window: Some(display), ..Default::default() })?;
+        let (backend, backend_why) = backend::resolve(&ctx.caps, opts.backend)?;
+        log::info!("ray backend: {} ({backend_why})", backend.variant());
+        let cameras = opts.scene.cameras.iter().map(|c| c.name.clone()).collect();
+        let edit = opts.settings.clone();
+        let renderer = Renderer::new(&ctx, &shaders, opts.scene, opts.settings, &opts.camera, backend)?;
+        if renderer.graph.image(&opts.view).is_none() {
+            bail!("--view {}: no such output; the frame has: {}", opts.view, renderer.graph.output_order.join(", "));
+        }
+        let size = window.inner_size();
+        let swapchain = Swapchain::new(&ctx, display, handle, (size.width, size.height), opts.vsync)?;
+        let presenter = Presenter::new(&ctx, &shaders, swapchain.format)?;
+        let egui = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(ctx.caps.max_image_dimension_2d as usize),
+        );
+        // Replaced by one at the current view when the user first moves (set_camera_mode).
+        let camera =
+            Controller::from_view(Mode::Scene, &renderer.view_of(&renderer.pose_of(0)), 1.0, (Vec3::ZERO, 1.0));
+        let scripted = opts.script.is_some();
+        Ok(Self {
+            presenter,
+            swapchain,
+            renderer,
+            egui_state,
+            egui,
+            window,
+            shaders,
+            watcher: opts.watch.as_deref().map(hot_reload::Watcher::new),
+            ctx,
+            backend,
+            backend_why,
+            camera,
+            cameras,
+            clock: Clock { playing: true, steps: 0 },
+            edit,
+            view: opts.view,
+            ui_visible: opts.ui,
+            script: opts.script.map(VecDeque::from),
+            frames_left: 0,
+            input: Input::default(),
+            out_dir: opts.out_dir,
+            force: opts.force,
+            message: if scripted { "scripted run".into() } else { String::new() },
+            shader_error: None,
+            pending_screenshot: None,
+            frame_ms: 0.0,
+            last_frame: Instant::now(),
+            resized_at: None,
+        })
+    }
+
+    /// Handles a window event; `false` ends the viewer.
+    fn window_event(&mut self, event: WindowEvent) -> Result<bool> {
+        let consumed = self.egui_state.on_window_event(&self.window, &event).consumed;
+        match event {
+            WindowEvent::CloseRequested => return Ok(false),
+            WindowEvent::Resized(size) => {
+                self.swapchain.resize(size.width, size.height);
+                self.resized_at = Some(Instant::now());
+            }
+            WindowEvent::RedrawRequested => return self.redraw(),
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else { return Ok(true) };
+                if event.state == ElementState::Released {
+                    // Releases always count, so a key never sticks when egui took the press.
+                    self.input.keys.remove(&code);
+                } else if !consumed && !self.egui.wants_keyboard_input() {
+                    self.input.keys.insert(code);
+                    self.input.tapped.insert(code);
+                    if !event.repeat {
+                        return self.shortcut(code);
+                    }
+                }
+            }
+            WindowEvent::MouseInput { state, button, .. } => match state {
+                ElementState::Pressed if !consumed && !self.egui.wants_pointer_input() => {
+                    self.input.buttons.insert(button);
+                }
+                _ => {
+                    self.input.buttons.remove(&button);
+                }
+            },
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some((x, y)) = self.input.cursor {
+                    let d = ((position.x - x) as f32, (position.y - y) as f32);
+                    let add = |acc: &mut (f32, f32)| *acc = (acc.0 + d.0, acc.1 + d.1);
+                    if self.input.buttons.contains(&MouseButton::Left) {
+                        add(&mut self.input.drag_left);
+                    }
+                    if self.input.buttons.contains(&MouseButton::Right)
+                        || self.input.buttons.contains(&MouseButton::Middle)
+                    {
+                        add(&mut self.input.drag_right);
+                    }
+                }
+                self.input.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::MouseWheel { delta, .. } if !consumed && !self.egui.wants_pointer_input() => {
+                self.input.wheel += match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+            }
+            _ => {}
+        }
+        Ok(true)
+    }
+
+    /// Keyboard shortcuts (while the overlay does not take the keyboard).
+    fn shortcut(&mut self, code: KeyCode) -> Result<bool> {
+        match code {
+            KeyCode::Escape => return Ok(false),
+            // Not Tab: egui takes it for moving the keyboard focus.
+            KeyCode::KeyO => {
+                let next = if self.camera.mode == Mode::Orbit { Mode::Fly } else { Mode::Orbit };
+                self.set_camera_mode(next);
+            }
+            KeyCode::Space => self.clock.playing = !self.clock.playing,
+            KeyCode::Period if !self.clock.playing => self.clock.steps += 1,
+            KeyCode::KeyV => self.swapchain.set_vsync(!self.swapchain.vsync),
+            KeyCode::F1 | KeyCode::KeyH => self.ui_visible = !self.ui_visible,
+            KeyCode::F12 | KeyCode::KeyP => self.pending_screenshot = Some(self.next_free("screenshot_", ".png")),
+            KeyCode::KeyC if !self.cameras.is_empty() => {
+                let next = self.renderer.camera_index().map_or(0, |i| (i + 1) % self.cameras.len());
+                self.renderer.set_camera(&CameraChoice::Index(next))?;
+                self.camera.mode = Mode::Scene;
+            }
+            _ => {}
+        }
+        Ok(true)
+    }
+
+    fn set_camera_mode(&mut self, mode: Mode) {
+        if self.camera.mode == Mode::Scene && mode != Mode::Scene {
+            // Take over from wherever the scene camera is now, orbiting the scene's centre
+            // distance.
+            let view = self.renderer.last_view.unwrap_or_else(|| self.renderer.view_of(&self.renderer.pose_of(0)));
+            let pose = self.renderer.pose_of(self.renderer.frame_index);
+            let (lo, hi) = self.renderer.scene.bounds(&pose);
+            let (centre, radius) = if lo.is_finite() && hi.is_finite() {
+                ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+            } else {
+                (Vec3::ZERO, 1.0)
+            };
+            let distance = (centre - view.position).dot(-view.view.inverse().z_axis.truncate()).max(1e-2);
+            self.camera = Controller::from_view(mode, &view, distance, (centre, radius));
+        } else {
+            self.camera.mode = mode;
+        }
+    }
+
+    /// One redraw: a script step, or an interactive frame.
+    fn redraw(&mut self) -> Result<bool> {
+        let now = Instant::now();
+        self.frame_ms = (now - self.last_frame).as_secs_f32() * 1000.0;
+        self.last_frame = now;
+        if !self.swapchain.visible() {
+            return Ok(true);
+        }
+        if self.script.is_some() {
+            return self.script_step();
+        }
+        self.hot_reload(false)?;
+        self.follow_window_size()?;
+        if !self.egui.is_using_pointer() {
+            self.apply_settings();
+        }
+        self.move_camera();
+        self.render()?;
+        let shot = self.pending_screenshot.take();
+        if let Err(e) = self.present(shot.as_deref()) {
+            // A failed screenshot is reported and the viewer goes on; anything else ends it.
+            if shot.is_none() {
+                return Err(e);
+            }
+            self.message = format!("screenshot failed: {e:#}");
+        }
+        Ok(true)
+    }
+
+    /// Runs script commands up to the next one that draws.
+    fn script_step(&mut self) -> Result<bool> {
+        loop {
+            if self.frames_left > 0 {
+                self.frames_left -= 1;
+                self.render()?;
+                self.present(None)?;
+                return Ok(true);
+            }
+            let Some(cmd) = self.script.as_mut().and_then(VecDeque::pop_front) else {
+                self.script = None;
+                self.message = "script done".into();
+                return Ok(true);
+            };
+            match cmd {
+                Command::Frames(n) => self.frames_left = n,
+                Command::View(name) => self.set_view(&name)?,
+                Command::Screenshot(path) => {
+                    if !self.present(Some(&path))? {
+                        // Nothing was drawn (the swapchain was being rebuilt): again next time.
+                        self.script.as_mut().expect("running").push_front(Command::Screenshot(path));
+                    }
+                    return Ok(true);
+                }
+                Command::Capture(dir) => {
+                    self.capture(Some(dir))?;
+                }
+                Command::Camera(name) => match name.as_str() {
+                    "fly" => self.set_camera_mode(Mode::Fly),
+                    "orbit" => self.set_camera_mode(Mode::Orbit),
+                    _ => {
+                        let choice: CameraChoice = name.parse().unwrap_or_default();
+                        self.renderer.set_camera(&choice)?;
+                        self.camera.mode = Mode::Scene;
+                    }
+                },
+                Command::Pause => self.clock.playing = false,
+                Command::Play => self.clock.playing = true,
+                Command::Step => self.clock.steps += 1,
+                Command::Reload => self.hot_reload(true)?,
+                Command::Ui(on) => self.ui_visible = on,
+                Command::Vsync(on) => self.swapchain.set_vsync(on),
+                Command::Set(key, value) => {
+                    tunables::set(&mut self.edit, &key, &value)?;
+                    if let Some(e) = self.apply_settings() {
+                        bail!("script: {key}={value}: {e}");
+                    }
+                }
+                Command::Quit => return Ok(false),
+            }
+        }
+    }
+
+    fn set_view(&mut self, name: &str) -> Result<()> {
+        if self.renderer.graph.image(name).is_none() {
+            bail!("no pass output named {name}; the frame has: {}", self.renderer.graph.output_order.join(", "));
+        }
+        self.view = name.to_string();
+        Ok(())
+    }
+
+    /// Polls the shader folder (interactive runs) or, when `now`, recompiles it and waits
+    /// (scripts and the reload button's scripted twin).
+    fn hot_reload(&mut self, now: bool) -> Result<()> {
+        let Some(w) = self.watcher.as_mut() else {
+            if now {
+                bail!("reload: no shader folder is watched (--watch-shaders DIR)");
+            }
+            return Ok(());
+        };
+        let result = if now {
+            w.start_compile();
+            w.wait()
+        } else {
+            if w.poll_changes() {
+                w.start_compile();
+            }
+            w.finished()
+        };
+        if let Some(result) = result {
+            self.shaders_compiled(result);
+        }
+        Ok(())
+    }
+
+    /// A compile finished: with new shaders the frame and the presenter are rebuilt; on any
+    /// failure the old library and pipelines stay and the error is shown.
+    fn shaders_compiled(&mut self, result: Result<ShaderLibrary>) {
+        let built = result.and_then(|lib| {
+            let presenter = Presenter::new(&self.ctx, &lib, self.swapchain.format)?;
+            let old = std::mem::replace(&mut self.shaders, lib);
+            match self.renderer.rebuild_frame(&self.shaders) {
+                Ok(()) => {
+                    self.presenter = presenter;
+                    Ok(())
+                }
+                Err(e) => {
+                    self.shaders = old;
+                    Err(e)
+                }
+            }
+        });
+        match built {
+            Ok(()) => {
+                self.shader_error = None;
+                self.message = "shaders reloaded".into();
+                self.fall_back_view();
+            }
+            Err(e) => {
+                // Also on stderr: a terminal (or a test) sees it without the overlay.
+                eprintln!("shader reload failed, the previous shaders stay in use: {e:#}");
+                self.shader_error = Some(format!("{e:#}"));
+            }
+        }
+    }
+
+    /// The shown output may be gone after a rebuild (TAA off removes `taa.color`).
+    fn fall_back_view(&mut self) {
+        if self.renderer.graph.image(&self.view).is_none() {
+            self.view = crate::render::DISPLAY_OUTPUT.to_string();
+        }
+    }
+
+    /// Applies the overlay's (or a script's) settings; returns the error when the frame
+    /// could not be rebuilt with them (the old settings then stay).
+    fn apply_settings(&mut self) -> Option<String> {
+        let current = &self.renderer.settings;
+        let changed: Vec<_> = tunables::ALL.iter().filter(|t| (t.get)(current) != (t.get)(&self.edit)).collect();
+        if changed.is_empty() {
+            return None;
+        }
+        let rebuild = changed.iter().any(|t| t.rebuild);
+        let old = std::mem::replace(&mut self.renderer.settings, self.edit.clone());
+        if rebuild && let Err(e) = self.renderer.rebuild_frame(&self.shaders) {
+            self.renderer.settings = old.clone();
+            self.edit = old;
+            let e = format!("{e:#}");
+            self.message = format!("settings not applied: {e}");
+            return Some(e);
+        }
+        self.fall_back_view();
+        None
+    }
+
+    /// Interactive runs render at the window's size once it has stopped changing (every size
+    /// rebuilds the frame's images).
+    fn follow_window_size(&mut self) -> Result<()> {
+        let Some(at) = self.resized_at else { return Ok(()) };
+        if at.elapsed() < Duration::from_millis(300) {
+            return Ok(());
+        }
+        self.resized_at = None;
+        let size = self.window.inner_size();
+        let s = &self.renderer.settings;
+        if size.width == 0 || size.height == 0 || (size.width, size.height) == (s.width, s.height) {
+            return Ok(());
+        }
+        let old = self.renderer.settings.clone();
+        self.renderer.settings.width = size.width;
+        self.renderer.settings.height = size.height;
+        if let Err(e) = self.renderer.rebuild_frame(&self.shaders) {
+            self.renderer.settings = old;
+            self.message = format!("kept the render size: {e:#}");
+        }
+        self.edit.width = self.renderer.settings.width;
+        self.edit.height = self.renderer.settings.height;
+        Ok(())
+    }
+
+    fn move_camera(&mut self) {
+        let held = |k| self.input.keys.contains(&k) || self.input.tapped.contains(&k);
+        let axis = |neg, pos| (held(pos) as i32 - held(neg) as i32) as f32;
+        let dir = Vec3::new(
+            axis(KeyCode::KeyA, KeyCode::KeyD),
+            axis(KeyCode::KeyQ, KeyCode::KeyE),
+            axis(KeyCode::KeyS, KeyCode::KeyW),
+        );
+        let fast = held(KeyCode::ShiftLeft) || held(KeyCode::ShiftRight);
+        let (left, right, wheel) = (self.input.drag_left, self.input.drag_right, self.input.wheel);
+        self.input.drag_left = (0.0, 0.0);
+        self.input.drag_right = (0.0, 0.0);
+        self.input.wheel = 0.0;
+        self.input.tapped.clear();
+        let moved = dir != Vec3::ZERO || left != (0.0, 0.0) || right != (0.0, 0.0) || wheel != 0.0;
+        if moved && self.camera.mode == Mode::Scene {
+            self.set_camera_mode(Mode::Fly);
+        }
+        // Slow devices (lavapipe: about a frame a second) still move at the set speed; a stall
+        // (a rebuild, a shader compile) does not jump the camera far.
+        let dt = (self.frame_ms / 1000.0).min(0.5);
+        match self.camera.mode {
+            Mode::Scene => {}
+            Mode::Fly => {
+                self.camera.fly(dir, dt, fast);
+                // Either button looks around in fly mode.
+                self.camera.look(left.0 + right.0, left.1 + right.1);
+            }
+            Mode::Orbit => {
+                self.camera.fly(dir, dt, fast);
+                self.camera.orbit(left.0, left.1);
+                self.camera.pan(right.0, right.1);
+            }
+        }
+        if wheel != 0.0 {
+            self.camera.wheel(wheel);
+        }
+    }
+
+    fn render(&mut self) -> Result<()> {
+        self.renderer.set_view_override(self.camera.view_override());
+        self.renderer.set_time(Some(self.clock.time(&self.renderer.settings)));
+        self.renderer.render_frame()?;
+        if self.clock.playing {
+            self.clock.steps += 1;
+        }
+        Ok(())
+    }
+
+    /// Draws the current frame's shown output (and the overlay) into the window; with
+    /// `screenshot`, also saves the window's pixels under the overlay there. `false` when
+    /// nothing could be drawn this time.
+    fn present(&mut self, screenshot: Option<&Path>) -> Result<bool> {
+        if let Some(path) = screenshot {
+            image_io::check_overwrite(path, self.force)?;
+        }
+        let name = self.view.clone();
+        let desc = self.renderer.graph.images.desc(&name).ok_or_else(|| anyhow!("no pass output named {name}"))?;
+        // The tonemap output is display-encoded RGBA8 already and is read in place; any other
+        // output goes through the capture's preview, so it looks exactly like its PNG.
+        let in_place = desc.preview == Preview::Display && desc.format == vk::Format::R8G8B8A8_UNORM;
+        let cpu = if in_place {
+            None
+        } else {
+            let preview = desc.preview;
+            let img = self.renderer.read_output(&name)?;
+            Some((img.width, img.height, capture::preview(&img, preview)))
+        };
+        let (overlay, actions) = if self.ui_visible { self.run_ui() } else { (None, Vec::new()) };
+        if self.presenter.format() != self.swapchain.format {
+            self.presenter = Presenter::new(&self.ctx, &self.shaders, self.swapchain.format)?;
+        }
+        let shown = match &cpu {
+            Some((width, height, texels)) => Shown::Rgba { width: *width, height: *height, texels },
+            None => Shown::Graph(self.renderer.graph.image(&name).expect("checked above")),
+        };
+        let overlay = overlay.as_ref().map(|(primitives, textures, ppp)| Overlay {
+            primitives,
+            textures,
+            pixels_per_point: *ppp,
+        });
+        let presenter = &mut self.presenter;
+        let drawn =
+            self.swapchain.draw(|rec, target| presenter.record(rec, target, shown, overlay, screenshot.is_some()))?;
+        for a in actions {
+            self.ui_action(a);
+        }
+        let Some(shot) = drawn else { return Ok(false) };
+        if let (Some(path), Some(shot)) = (screenshot, shot) {
+            image_io::write_png_rgba8(path, shot.width, shot.height, &shot.rgba()?)?;
+            self.message = format!("saved {}", path.display());
+            println!("screenshot {} ({}x{}, {name})", path.display(), shot.width, shot.height);
+        }
+        Ok(true)
+    }
+
+    /// Runs the overlay for this frame: its tessellated triangles, texture changes and scale,
+    /// and what the user asked for.
+    #[allow(clippy::type_complexity)]
+    fn run_ui(&mut self) -> (Option<(Vec<egui::ClippedPrimitive>, egui::TexturesDelta, f32)>, Vec<ui::Action>) {
+        let raw = self.egui_state.take_egui_input(&self.window);
+        let present_mode = format!("{:?}", self.swapchain.present_mode);
+        let watched = self.watcher.as_ref().map(|w| w.dir.display().to_string());
+        let info = ui::Info {
+            device: &self.ctx.caps.device_name,
+            backend: self.backend.variant(),
+            backend_why: &self.backend_why,
+            pass_times: &self.renderer.last_pass_times,
+            outputs: &self.renderer.graph.output_order,
+            view: &self.view,
+            cameras: &self.cameras,
+            scene_camera: self.renderer.camera_index(),
+            camera_mode: self.camera.mode,
+            frame: self.renderer.frame_index,
+            frame_ms: self.frame_ms,
+            size: (self.renderer.settings.width, self.renderer.settings.height),
+            vsync: self.swapchain.vsync,
+            present_mode: &present_mode,
+            playing: self.clock.playing,
+            time: self.clock.time(&self.renderer.settings),
+            shader_dir: watched.as_deref(),
+            compiling: self.watcher.as_ref().is_some_and(|w| w.compiling()),
+            shader_error: self.shader_error.as_deref(),
+            message: &self.message,
+        };
+        let mut edit = self.edit.clone();
+        let mut actions = Vec::new();
+        let out = self.egui.run(raw, |ctx| actions = ui::draw(ctx, &info, &mut edit));
+        self.edit = edit;
+        self.egui_state.handle_platform_output(&self.window, out.platform_output);
+        let primitives = self.egui.tessellate(out.shapes, out.pixels_per_point);
+        (Some((primitives, out.textures_delta, out.pixels_per_point)), actions)
+    }
+
+    /// What the overlay asked for; failures become its message (interactive use goes on).
+    fn ui_action(&mut self, action: ui::Action) {
+        let result = match action {
+            ui::Action::View(name) => self.set_view(&name),
+            ui::Action::SceneCamera(i) => {
+                self.camera.mode = Mode::Scene;
+                self.renderer.set_camera(&CameraChoice::Index(i))
+            }
+            ui::Action::CameraMode(mode) => {
+                self.set_camera_mode(mode);
+                Ok(())
+            }
+            ui::Action::Play(on) => {
+                self.clock.playing = on;
+                Ok(())
+            }
+            ui::Action::Step => {
+                self.clock.steps += 1;
+                Ok(())
+            }
+            ui::Action::Vsync(on) => {
+                self.swapchain.set_vsync(on);
+                Ok(())
+            }
+            ui::Action::Reload => {
+                if let Some(w) = self.watcher.as_mut() {
+                    w.start_compile();
+                }
+                Ok(())
+            }
+            ui::Action::Screenshot => {
+                self.pending_screenshot = Some(self.next_free("screenshot_", ".png"));
+                Ok(())
+            }
+            ui::Action::Capture => self.capture(None).map(|_| ()),
+        };
+        if let Err(e) = result {
+            self.message = format!("{e:#}");
+        }
+    }
+
+    /// Dumps every pass output of the current frame (the capture of `render --dump-passes`).
+    fn capture(&mut self, dir: Option<PathBuf>) -> Result<PathBuf> {
+        let dir = dir.unwrap_or_else(|| self.next_free("capture_", ""));
+        let scene = self.renderer.scene.name.clone();
+        let mut c = Capture::new(&dir, false, self.force, &scene, &self.ctx.caps.device_name)?;
+        c.dump(&mut self.renderer)?;
+        self.message = format!("captured every pass output into {}", dir.display());
+        println!("capture {}", dir.display());
+        Ok(dir)
+    }
+
+    /// `out_dir/PREFIX0001SUFFIX`, the first number not taken.
+    fn next_free(&self, prefix: &str, suffix: &str) -> PathBuf {
+        (1..)
+            .map(|i| self.out_dir.join(format!("{prefix}{i:04}{suffix}")))
+            .find(|p| !p.exists())
+            .expect("some number is free")
+    }
+}

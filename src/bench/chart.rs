@@ -1,0 +1,368 @@
+//! The sweep's chart: GPU frame time against HDR-FLIP, one labelled point per configuration,
+//! the Pareto front as a line, and the reference's noise floor as a dashed line. The same
+//! drawing goes to SVG (text as text) and to PNG (text rasterised with an embedded font, so
+//! no system fonts are needed).
+
+use super::sweep::SceneSweep;
+use crate::image_io;
+use ab_glyph::{Font, FontRef, ScaleFont};
+use anyhow::{Result, anyhow};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters_backend::text_anchor::{HPos, VPos};
+use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Pixels of the PNG; the SVG has the same user units.
+const SIZE: (u32, u32) = (1100, 700);
+const FONT: &str = "sans-serif";
+
+/// plotters draws text with fonts registered under a family name; the Ubuntu face that egui's
+/// font crate embeds stands in for "sans-serif" (open licence: Ubuntu Font Licence 1.0).
+fn register_font() -> Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT).is_ok()
+    });
+    if ok { Ok(()) } else { Err(anyhow!("the embedded chart font does not parse")) }
+}
+
+/// Writes the chart of one scene's sweep as PNG and SVG.
+pub fn write(sweep: &SceneSweep, png: &Path, svg: &Path) -> Result<()> {
+    register_font()?;
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, SIZE).into_drawing_area();
+        draw(&root, sweep).map_err(|e| anyhow!("{}: drawing the chart: {e}", svg.display()))?;
+    }
+    image_io::write_atomic(svg, |tmp| Ok(std::fs::write(tmp, &text)?))?;
+
+    let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    {
+        let font = FontRef::try_from_slice(epaint_default_fonts::UBUNTU_LIGHT)?;
+        let root = GlyphText { inner: BitMapBackend::with_buffer(&mut rgb, SIZE), font }.into_drawing_area();
+        draw(&root, sweep).map_err(|e| anyhow!("{}: drawing the chart: {e}", png.display()))?;
+    }
+    let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect();
+    image_io::write_png_rgba8(png, SIZE.0, SIZE.1, &rgba)
+}
+
+/// A bitmap backend whose text is rasterised here: each glyph placed at its pen position plus
+/// its own bounds (plotters' ab_glyph text leaves the side bearing out, so letters crowd and
+/// gap), with kerning, anchors and the axis title's rotation as plotters defines them.
+struct GlyphText<'a> {
+    inner: BitMapBackend<'a>,
+    font: FontRef<'static>,
+}
+
+type BackendResult<E> = Result<(), DrawingErrorKind<E>>;
+
+impl GlyphText<'_> {
+    /// Width and height of `text` in pixels (pen advance with kerning; ascent to descent).
+    fn measure(&self, text: &str, size: f64) -> (i32, i32) {
+        let font = self.font.as_scaled(size as f32);
+        let mut prev = None;
+        let mut x = 0.0;
+        for c in text.chars() {
+            let id = font.glyph_id(c);
+            x += prev.map_or(0.0, |p| font.kern(p, id)) + font.h_advance(id);
+            prev = Some(id);
+        }
+        (x.ceil() as i32, (font.ascent() - font.descent()).ceil() as i32)
+    }
+}
+
+impl DrawingBackend for GlyphText<'_> {
+    type ErrorType = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+
+    fn get_size(&self) -> (u32, u32) {
+        self.inner.get_size()
+    }
+    fn ensure_prepared(&mut self) -> BackendResult<Self::ErrorType> {
+        self.inner.ensure_prepared()
+    }
+    fn present(&mut self) -> BackendResult<Self::ErrorType> {
+        self.inner.present()
+    }
+    fn draw_pixel(&mut self, point: BackendCoord, color: BackendColor) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_pixel(point, color)
+    }
+    fn draw_line<S: plotters_backend::BackendStyle>(
+        &mut self,
+        a: BackendCoord,
+        b: BackendCoord,
+        s: &S,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_line(a, b, s)
+    }
+    fn draw_rect<S: plotters_backend::BackendStyle>(
+        &mut self,
+        a: BackendCoord,
+        b: BackendCoord,
+        s: &S,
+        fill: bool,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_rect(a, b, s, fill)
+    }
+    fn fill_polygon<S: plotters_backend::BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        vert: I,
+        s: &S,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.fill_polygon(vert, s)
+    }
+    fn draw_circle<S: plotters_backend::BackendStyle>(
+        &mut self,
+        c: BackendCoord,
+        r: u32,
+        s: &S,
+        fill: bool,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_circle(c, r, s, fill)
+    }
+
+    fn estimate_text_size<T: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &T,
+    ) -> Result<(u32, u32), DrawingErrorKind<Self::ErrorType>> {
+        let (w, h) = self.measure(text, style.size());
+        Ok((w as u32, h as u32))
+    }
+
+    fn draw_text<T: BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &T,
+        pos: BackendCoord,
+    ) -> BackendResult<Self::ErrorType> {
+        let color = style.color();
+        let (w, h) = self.measure(text, style.size());
+        let anchor = style.anchor();
+        let dx = match anchor.h_pos {
+            HPos::Left => 0,
+            HPos::Center => -w / 2,
+            HPos::Right => -w,
+        };
+        let dy = match anchor.v_pos {
+            VPos::Top => 0,
+            VPos::Center => -h / 2,
+            VPos::Bottom => -h,
+        };
+        let transform = style.transform();
+        let font = self.font.as_scaled(style.size() as f32);
+        let mut coverage = Vec::new();
+        let (mut x, mut prev) = (0.0, None);
+        for c in text.chars() {
+            let id = font.glyph_id(c);
+            x += prev.map_or(0.0, |p| font.kern(p, id));
+            prev = Some(id);
+            let glyph = id.with_scale_and_position(font.scale(), ab_glyph::point(x, font.ascent()));
+            x += font.h_advance(id);
+            let Some(outline) = font.outline_glyph(glyph) else { continue };
+            let b = outline.px_bounds();
+            outline.draw(|gx, gy, cov| {
+                coverage.push((b.min.x as i32 + gx as i32 + dx, b.min.y as i32 + gy as i32 + dy, cov));
+            });
+        }
+        for (px, py, cov) in coverage {
+            let (tx, ty) = transform.transform(px, py);
+            let alpha = color.alpha * cov.clamp(0.0, 1.0) as f64;
+            self.inner.draw_pixel((pos.0 + tx, pos.1 + ty), BackendColor { alpha, rgb: color.rgb })?;
+        }
+        Ok(())
+    }
+}
+
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &SceneSweep) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(err)?;
+    let points: Vec<_> = s.points.iter().filter(|p| p.frame_ms.is_finite() && p.flip > 0.0).collect();
+    let max_ms = points.iter().map(|p| p.frame_ms).fold(1e-3, f64::max);
+    let noise = s.reference.made.noise_flip;
+    // Log scale: FLIP spans several factors between the raw and the denoised frames.
+    let (lo, hi) = points
+        .iter()
+        .map(|p| p.flip)
+        .chain([noise])
+        .filter(|v| *v > 0.0)
+        .fold((1.0, 1e-6), |(lo, hi), v| (f64::min(lo, v), f64::max(hi, v)));
+    let (lo, hi) = if lo < hi { (lo / 1.25, hi * 1.25) } else { (0.01, 1.0) };
+    let title = format!("{}, {}x{}, {} backend, {}", s.scene_name, s.width, s.height, s.backend, s.device);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, 22))
+        .margin(18)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..max_ms * 1.15, (lo..hi).log_scale().with_key_points(log_ticks(lo, hi)))
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(format!(
+            "GPU frame time, ms (median of {} frames after {} warm-up)",
+            s.timed_frames,
+            s.frames - s.timed_frames
+        ))
+        .y_desc(format!("HDR-FLIP against a {} spp path-traced reference", s.reference.made.spp))
+        .y_label_formatter(&|v| tick_label(*v))
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 16))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(err)?;
+
+    let front_color = RGBColor(200, 40, 40);
+    let front: Vec<(f64, f64)> = s
+        .pareto_front
+        .iter()
+        .filter_map(|n| points.iter().find(|p| &p.name == n))
+        .map(|p| (p.frame_ms, p.flip))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(front, front_color.stroke_width(2)))
+        .map_err(err)?
+        .label("Pareto front")
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], front_color.stroke_width(2)));
+    if noise > 0.0 {
+        let grey = RGBColor(120, 120, 120);
+        chart
+            .draw_series(DashedLineSeries::new([(0.0, noise), (max_ms * 1.15, noise)], 6, 4, grey.stroke_width(1)))
+            .map_err(err)?
+            .label("reference noise (FLIP between its two halves)")
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(1)));
+    }
+    let on = RGBColor(30, 30, 30);
+    let off = RGBColor(110, 110, 170);
+    chart
+        .draw_series(points.iter().map(|p| {
+            let (color, size) = if p.pareto { (on, 5) } else { (off, 4) };
+            EmptyElement::at((p.frame_ms, p.flip))
+                + Circle::new((0, 0), size, color.filled())
+                + Text::new(p.name.clone(), (7, -14), (FONT, 13).into_font().color(&color))
+        }))
+        .map_err(err)?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.4))
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// A tick value with as many decimals as its leading digit needs (0.3, not 0.30000000000000004).
+fn tick_label(v: f64) -> String {
+    let decimals = (-v.log10().floor()).max(0.0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// Tick values for a log axis from `lo` to `hi`: 1, 2 and 5 times the powers of ten, or, when
+/// the range holds fewer than four of those, 1 to 9 times them (a range within one decade).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let decades = lo.log10().floor() as i32..=hi.log10().ceil() as i32;
+    let ticks = |mantissas: &[f64]| -> Vec<f64> {
+        decades
+            .clone()
+            .flat_map(|e| mantissas.iter().map(move |m| m * 10f64.powi(e)))
+            .filter(|v| (lo..=hi).contains(v))
+            .collect()
+    };
+    let coarse = ticks(&[1.0, 2.0, 5.0]);
+    if coarse.len() >= 4 { coarse } else { ticks(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::sweep::{Point, ReferenceInfo, ReferenceMade};
+
+    fn sweep(points: &[(&str, f64, f64, bool)]) -> SceneSweep {
+        let made = ReferenceMade {
+            scene: "s.gltf".into(),
+            scene_hash: "0".into(),
+            camera: "default".into(),
+            width: 320,
+            height: 180,
+            spp: 512,
+            max_bounces: 256,
+            seeds: [1, 2],
+            noise_flip: 0.021,
+            render_seconds: 1.0,
+            backend: "compute".into(),
+            device: "test device".into(),
+        };
+        let points: Vec<Point> = points
+            .iter()
+            .map(|&(name, frame_ms, flip, pareto)| Point {
+                name: name.into(),
+                config: name.parse().unwrap(),
+                frame_ms,
+                frame_ms_samples: vec![frame_ms],
+                passes: Vec::new(),
+                flip,
+                psnr_db: Some(30.0),
+                ssim: 0.9,
+                pareto,
+                seconds: 1.0,
+            })
+            .collect();
+        SceneSweep {
+            scene: "s.gltf".into(),
+            scene_name: "test scene".into(),
+            scene_hash: "0".into(),
+            camera: "default".into(),
+            width: 320,
+            height: 180,
+            backend: "compute".into(),
+            device: "test device".into(),
+            driver: "test driver".into(),
+            frames: 48,
+            timed_frames: 8,
+            reference: ReferenceInfo { path: "r.exr".into(), cached: false, seconds: 1.0, made },
+            pareto_front: points.iter().filter(|p| p.pareto).map(|p| p.name.clone()).collect(),
+            points,
+            seconds: 1.0,
+        }
+    }
+
+    #[test]
+    fn writes_png_and_svg_with_the_labels() {
+        let s = sweep(&[
+            ("d0-s5-b1-r1-t0", 12.0, 0.31, true),
+            ("d0-s1-b1-r1", 14.0, 0.12, true),
+            ("d4-s5-b1-r1", 30.0, 0.062, true),
+            ("d4-s8-b2-r2", 55.0, 0.07, false),
+        ]);
+        let dir = std::env::temp_dir().join(format!("hybrid-rt-chart-{}", std::process::id()));
+        let (png, svg) = (dir.join("c.png"), dir.join("c.svg"));
+        write(&s, &png, &svg).unwrap();
+        let img = image::open(&png).unwrap();
+        assert_eq!((img.width(), img.height()), SIZE);
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
+        for label in ["d4-s5-b1-r1", "Pareto front", "test scene, 320x180"] {
+            assert!(text.contains(label), "the SVG lacks '{label}'");
+        }
+        if std::env::var_os("HYBRID_RT_KEEP_CHART").is_none() {
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+    }
+
+    #[test]
+    fn log_ticks_cover_the_range() {
+        assert_eq!(log_ticks(0.05, 0.6), vec![0.05, 0.1, 0.2, 0.5]);
+        let fine = log_ticks(0.15, 0.5);
+        assert_eq!(fine.len(), 4);
+        assert!(fine.iter().all(|v| (0.15..=0.5).contains(v)));
+        assert_eq!(fine.iter().map(|&v| tick_label(v)).collect::<Vec<_>>(), ["0.2", "0.3", "0.4", "0.5"]);
+        assert_eq!(tick_label(0.05), "0.05");
+    }
+}

@@ -1,0 +1,188 @@
+//! The pass plan: no more work than the scene needs. Decided once per scene from what is in it,
+//! printed by `hybrid-rt plan`, used by default; `--full` runs everything.
+//!
+//! - Reflection rays only if some surface is at or under the roughness cut-off (rougher ones
+//!   get their specular lobe from gi's samples anyway).
+//! - Soft-shadow machinery (penumbra detection, tent, filter) only if some light has a radius;
+//!   with punctual lights only, one hard-shadow ray per light and no filter.
+//! - Lights whose range cannot reach any geometry are culled (static scenes only: in an
+//!   animated scene a light or an object could move into range).
+//! - Instances share one bottom-level structure per unique mesh (reported; always so).
+//! - GI runs every frame when any surface has a diffuse albedo or is rough enough for its
+//!   specular lobe to come from gi; otherwise it would have nothing to add.
+
+use crate::scene::{Scene, TextureRef};
+use glam::Vec3;
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FramePlan {
+    pub reflections: bool,
+    pub soft_shadows: bool,
+    pub gi: bool,
+    /// Indices into the scene's lights that cannot reach any geometry.
+    pub culled_lights: Vec<usize>,
+    /// One line per decision, saying why.
+    pub reasons: Vec<String>,
+}
+
+impl FramePlan {
+    /// Everything on (`--full`).
+    pub fn full() -> Self {
+        Self {
+            reflections: true,
+            soft_shadows: true,
+            gi: true,
+            culled_lights: Vec::new(),
+            reasons: vec!["--full: every pass runs".into()],
+        }
+    }
+
+    pub fn for_scene(scene: &Scene, roughness_cutoff: f32) -> Self {
+        let mut reasons = Vec::new();
+
+        let glossy: Vec<&str> = scene
+            .materials
+            .iter()
+            .filter(|m| min_roughness(scene, m.roughness_factor, m.metallic_roughness_texture) <= roughness_cutoff)
+            .map(|m| m.name.as_str())
+            .collect();
+        let reflections = !glossy.is_empty();
+        reasons.push(if reflections {
+            format!("reflections: traced, {} material(s) at or under roughness {roughness_cutoff}: {}", glossy.len(), list(&glossy))
+        } else {
+            format!("reflections: no rays, no surface is at or under roughness {roughness_cutoff} (gi estimates the specular lobes)")
+        });
+
+        let soft: Vec<&str> = scene.lights.iter().filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
+        let soft_shadows = !soft.is_empty();
+        reasons.push(if soft_shadows {
+            format!("shadows: adaptive soft shadows for {} light(s) with a radius: {}", soft.len(), list(&soft))
+        } else {
+            "shadows: every light is punctual: one hard-shadow ray per light, no penumbra detection or filter".into()
+        });
+
+        let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
+        if scene.is_animated() {
+            reasons.push("lights: none culled, the scene is animated".into());
+        } else if culled_lights.is_empty() {
+            reasons.push("lights: every light reaches some geometry".into());
+        } else {
+            let names: Vec<&str> = culled_lights.iter().map(|&i| scene.lights[i].name.as_str()).collect();
+            reasons.push(format!("lights: culled {} whose range reaches no geometry: {}", names.len(), list(&names)));
+        }
+
+        let unique = scene.meshes.len();
+        reasons.push(format!(
+            "geometry: {} instance(s) share {unique} bottom-level structure(s), one per unique mesh",
+            scene.instances.len()
+        ));
+
+        let diffuse = scene.materials.iter().any(|m| m.metallic_factor < 1.0 || m.metallic_roughness_texture.is_some());
+        let rough = scene.materials.iter().any(|m| m.roughness_factor > roughness_cutoff);
+        let gi = diffuse || rough;
+        reasons.push(if gi {
+            "gi: every frame (diffuse or rough surfaces need indirect light)".into()
+        } else {
+            "gi: skipped, every surface is a smooth metal (no diffuse lobe, no rough specular)".into()
+        });
+        Self { reflections, soft_shadows, gi, culled_lights, reasons }
+    }
+}
+
+fn list(names: &[&str]) -> String {
+    const SHOWN: usize = 6;
+    let mut s = names.iter().take(SHOWN).map(|n| if n.is_empty() { "(unnamed)" } else { n }).collect::<Vec<_>>().join(", ");
+    if names.len() > SHOWN {
+        s.push_str(&format!(" and {} more", names.len() - SHOWN));
+    }
+    s
+}
+
+/// The lowest roughness a material reaches: its factor times the smallest green value of its
+/// metallic-roughness texture (the texture can only lower it).
+fn min_roughness(scene: &Scene, factor: f32, texture: Option<TextureRef>) -> f32 {
+    let Some(t) = texture else { return factor };
+    let image = scene.textures.get(t.texture as usize).and_then(|t| t.image).and_then(|i| scene.images.get(i as usize));
+    match image {
+        Some(img) => {
+            let min_g = img.rgba8.chunks_exact(4).map(|p| p[1]).min().unwrap_or(255);
+            factor * min_g as f32 / 255.0
+        }
+        None => factor,
+    }
+}
+
+/// Lights with a range whose sphere misses the bounds of every instance (at time 0).
+fn out_of_range(scene: &Scene) -> Vec<usize> {
+    let pose = scene.evaluate(0.0);
+    let boxes: Vec<(Vec3, Vec3)> = scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let mesh = &scene.meshes[inst.mesh as usize];
+            let m = pose.world[inst.node as usize];
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for i in 0..8 {
+                let c = Vec3::new(
+                    if i & 1 == 0 { mesh.bounds_min.x } else { mesh.bounds_max.x },
+                    if i & 2 == 0 { mesh.bounds_min.y } else { mesh.bounds_max.y },
+                    if i & 4 == 0 { mesh.bounds_min.z } else { mesh.bounds_max.z },
+                );
+                let w = m.transform_point3(c);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+            (lo, hi)
+        })
+        .collect();
+    scene
+        .lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| {
+            let Some(range) = l.range else { return false };
+            let centre = pose.world[l.node as usize].transform_point3(Vec3::ZERO);
+            // Reaching means the range sphere (plus the emitter's own radius) touches a box.
+            let reach = range + l.radius;
+            !boxes.iter().any(|(lo, hi)| centre.clamp(*lo, *hi).distance_squared(centre) <= reach * reach)
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    #[test]
+    fn punctual_only_scenes_get_hard_shadows_and_matte_ones_no_reflection_rays() {
+        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6);
+        assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6);
+        assert!(p.soft_shadows);
+    }
+
+    #[test]
+    fn lights_out_of_range_are_culled_in_static_scenes() {
+        let mut s = builtin::shadow_test();
+        let mut far = s.lights[0].clone();
+        far.kind = crate::scene::LightKind::Point;
+        far.range = Some(1.0);
+        let node = s.nodes.len() as u32;
+        s.nodes.push(crate::scene::Node {
+            name: "far".into(),
+            parent: None,
+            translation: Vec3::new(0.0, 500.0, 0.0),
+            rotation: glam::Quat::IDENTITY,
+            scale: Vec3::ONE,
+        });
+        far.node = node;
+        s.lights.push(far);
+        let p = FramePlan::for_scene(&s, 0.6);
+        assert_eq!(p.culled_lights, vec![1], "{:?}", p.reasons);
+        // The same light in reach stays.
+        s.nodes[node as usize].translation = Vec3::new(0.0, 1.5, 0.0);
+        assert!(FramePlan::for_scene(&s, 0.6).culled_lights.is_empty());
+    }
+}
