@@ -1,4 +1,4 @@
-//! The sweep's chart: GPU frame time against HDR-FLIP, one labelled point per configuration,
+//! The sweep's chart: frame time against HDR-FLIP, one labelled point per configuration,
 //! the Pareto front as a line, and the reference's noise floor as a dashed line. The same
 //! drawing goes to SVG (text as text) and to PNG (text rasterised with an embedded font, so
 //! no system fonts are needed).
@@ -203,7 +203,7 @@ where
     chart
         .configure_mesh()
         .x_desc(format!(
-            "GPU frame time, ms (median of {} frames after {} warm-up)",
+            "frame time, ms (wall clock, record to fence; median of {} frames after {} warm-up)",
             s.timed_frames,
             s.frames - s.timed_frames
         ))
@@ -306,6 +306,7 @@ mod tests {
                 config: name.parse().unwrap(),
                 frame_ms,
                 frame_ms_samples: vec![frame_ms],
+                timestamp_ms: frame_ms,
                 passes: Vec::new(),
                 flip,
                 psnr_db: Some(30.0),

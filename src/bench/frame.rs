@@ -30,28 +30,32 @@ pub struct FrameCost {
     /// All svgf_* passes together.
     pub svgf_ms: f64,
     pub svgf_share: f64,
+    /// Median wall-clock frame time, recording to fence (see `Renderer::last_frame_wall_ms`).
+    pub wall_ms: f64,
 }
 
-/// Renders `warmup + frames` frames of `scene` (the default frame: TAA and denoiser on) and
-/// takes the median GPU time of every pass over the last `frames`.
+/// Renders `warmup + frames` frames of `scene` (the default frame: TAA and denoiser on; the
+/// frame plan unless `full`) and takes the median GPU time of every pass over the last `frames`.
 pub fn measure(
     ctx: &Arc<Context>,
     shaders: &ShaderLibrary,
     scene: Scene,
     backend: Backend,
     (width, height): (u32, u32),
-    warmup: u32,
-    frames: u32,
+    full: bool,
+    (warmup, frames): (u32, u32),
 ) -> Result<FrameCost> {
-    let settings = Settings { width, height, taa: true, ..Default::default() };
+    let settings = Settings { width, height, taa: true, full, ..Default::default() };
     let mut r = Renderer::new(ctx, shaders, scene, settings, &CameraChoice::Default, backend)?;
     for _ in 0..warmup {
         r.render_frame()?;
     }
     let mut samples: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut order = Vec::new();
+    let mut wall = Vec::new();
     for _ in 0..frames.max(1) {
         r.render_frame()?;
+        wall.push(r.last_frame_wall_ms);
         for t in &r.last_pass_times {
             if !samples.contains_key(&t.pass) {
                 order.push(t.pass.clone());
@@ -71,6 +75,7 @@ pub fn measure(
         passes: medians.into_iter().map(|(pass, ms)| PassCost { pass, ms, share: share(ms) }).collect(),
         svgf_ms,
         svgf_share: share(svgf_ms),
+        wall_ms: median(&wall),
     })
 }
 
@@ -95,9 +100,14 @@ pub fn table(costs: &[FrameCost]) -> String {
         s.push_str(&format!(" {:>22}", format!("{:.2} ({:.1}%)", c.svgf_ms, 100.0 * c.svgf_share)));
     }
     s.push('\n');
-    s.push_str(&format!("{:<28}", "frame total"));
+    s.push_str(&format!("{:<28}", "timestamps total"));
     for c in costs {
         s.push_str(&format!(" {:>22}", format!("{:.2}", c.total_ms)));
+    }
+    s.push('\n');
+    s.push_str(&format!("{:<28}", "frame wall clock"));
+    for c in costs {
+        s.push_str(&format!(" {:>22}", format!("{:.2}", c.wall_ms)));
     }
     s.push('\n');
     s

@@ -3,6 +3,7 @@
 //! Results go to the terminal as a table and to disk as JSON.
 
 pub mod chart;
+pub mod frame;
 pub mod rays;
 pub mod soak;
 pub mod sweep;

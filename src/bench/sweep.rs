@@ -2,9 +2,11 @@
 //! (denoiser, shadow rays, GI bounces, reflection rays, TAA) is rendered on a frozen scene and
 //! measured twice over:
 //!
-//! - **Frame time**: the sum of the per-pass GPU times (timestamp queries) of one frame; the
-//!   median over the last `timed_frames` of the run (the first frames include lavapipe's
-//!   pipeline compilation and histories that are still filling). The per-pass split is kept.
+//! - **Frame time**: the wall-clock time of one frame from recording to its fence; the median
+//!   over the last `timed_frames` of the run (the first frames include lavapipe's pipeline
+//!   compilation and histories that are still filling). The per-pass split comes from GPU
+//!   timestamp queries and is kept beside it, with their sum: on a GPU the two agree to within
+//!   the recording cost, on lavapipe the timestamps leave compute dispatches out.
 //! - **Error**: HDR-FLIP (and PSNR, SSIM after ACES + sRGB) of the frame after `frames` frames
 //!   (static camera, `frame_dt` 0, so the temporal passes converge as far as they do) against
 //!   the reference path tracer at the same size.
@@ -35,8 +37,9 @@ use std::time::Instant;
 
 /// One configuration of the hybrid frame. Its name lists the settings as letter + number,
 /// joined by `-`: `d` SVGF à-trous iterations (0 = denoiser off), `s` shadow rays per pixel
-/// and area light at most (s_max), `b` GI bounces, `r` reflection rays per pixel, and `t0`
-/// when TAA is off. Settings left out of a name take the defaults (`d4-s5-b1-r1`, TAA on:
+/// and area light at most (s_max), `b` GI bounces, `r` reflection rays per pixel, `t0`
+/// when TAA is off, and `f1` when every pass runs instead of the scene's frame plan
+/// (src/render/plan.rs): a pair differing only in `f` shows what the plan saves and costs. Settings left out of a name take the defaults (`d4-s5-b1-r1`, TAA on:
 /// the renderer's defaults, and what `hybrid-rt render` draws).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Config {
@@ -45,6 +48,9 @@ pub struct Config {
     pub gi_bounces: u32,
     pub reflection_rays: u32,
     pub taa: bool,
+    /// Every pass (`--full`) instead of the frame plan.
+    #[serde(default)]
+    pub full: bool,
 }
 
 impl Default for Config {
@@ -56,6 +62,7 @@ impl Default for Config {
             gi_bounces: s.gi.bounces,
             reflection_rays: s.reflections.rays,
             taa: true,
+            full: false,
         }
     }
 }
@@ -69,6 +76,9 @@ impl std::fmt::Display for Config {
         )?;
         if !self.taa {
             write!(f, "-t0")?;
+        }
+        if self.full {
+            write!(f, "-f1")?;
         }
         Ok(())
     }
@@ -95,9 +105,16 @@ impl std::str::FromStr for Config {
                     c.taa = n == 1;
                     continue;
                 }
+                "f" => {
+                    if n > 1 {
+                        bail!("configuration '{s}': f takes 0 (frame plan) or 1 (every pass)");
+                    }
+                    c.full = n == 1;
+                    continue;
+                }
                 _ => bail!(
                     "configuration '{s}': unknown setting '{key}' (d: denoiser iterations, s: shadow s_max, \
-                     b: GI bounces, r: reflection rays, t: TAA 0/1)"
+                     b: GI bounces, r: reflection rays, t: TAA 0/1, f: every pass 0/1)"
                 ),
             };
             if !range.contains(&n) {
@@ -120,12 +137,13 @@ impl Config {
         s.gi.bounces = self.gi_bounces;
         s.reflections.rays = self.reflection_rays;
         s.taa = self.taa;
+        s.full = self.full;
     }
 }
 
 /// The default configurations: each axis moved away from the renderer's defaults (d4-s5-b1-r1)
 /// on its own, once with the denoiser on and once with it off, plus the cheapest and the most
-/// expensive corners. 14 configurations take ~5 minutes at 320x180 on a 2-core lavapipe;
+/// expensive corners. 15 configurations take ~5 minutes at 320x180 on a 2-core lavapipe;
 /// the full grid (5 x 3 x 2 x 2 x 2 = 120) would take hours and add few new front points.
 pub const DEFAULT_CONFIGS: &[&str] = &[
     "d0-s5-b1-r1-t0", // no temporal filtering at all: the raw one-sample frame
@@ -134,6 +152,7 @@ pub const DEFAULT_CONFIGS: &[&str] = &[
     "d1-s5-b1-r1",
     "d2-s5-b1-r1",
     "d4-s5-b1-r1", // the renderer's defaults
+    "d4-s5-b1-r1-f1", // the same with every pass: what the frame plan saves and costs
     "d4-s5-b1-r1-t0",
     "d4-s1-b1-r1",
     "d4-s8-b1-r1",
@@ -214,10 +233,15 @@ pub struct PassMs {
 pub struct Point {
     pub name: String,
     pub config: Config,
-    /// Median over the timed frames of the summed per-pass GPU time.
+    /// Median over the timed frames of the frame's wall-clock time, recording to fence
+    /// (`Renderer::last_frame_wall_ms` says why not the timestamps).
     pub frame_ms: f64,
-    /// The summed GPU time of each timed frame.
+    /// The wall-clock time of each timed frame.
     pub frame_ms_samples: Vec<f64>,
+    /// Median of the summed per-pass GPU timestamps (what the driver reports; on lavapipe it
+    /// leaves compute dispatches out).
+    #[serde(default)]
+    pub timestamp_ms: f64,
     pub passes: Vec<PassMs>,
     /// HDR-FLIP against the reference (mean over pixels; 0 = identical).
     pub flip: f64,
@@ -448,6 +472,7 @@ fn measure(
     config.apply(&mut settings);
     let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
     let mut totals = Vec::new();
+    let mut stamps = Vec::new();
     let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
     for n in 0..opts.frames {
         r.render_frame()?;
@@ -455,10 +480,8 @@ fn measure(
         if n < opts.frames - opts.timed_frames {
             continue;
         }
-        if r.last_pass_times.is_empty() {
-            bail!("the device returned no timestamps; the sweep needs GPU timestamp queries");
-        }
-        totals.push(r.last_pass_times.iter().map(|t| t.gpu_ms).sum());
+        totals.push(r.last_frame_wall_ms);
+        stamps.push(r.last_pass_times.iter().map(|t| t.gpu_ms).sum());
         if per_pass.is_empty() {
             per_pass = r.last_pass_times.iter().map(|t| (t.pass.clone(), Vec::new())).collect();
         }
@@ -480,6 +503,7 @@ fn measure(
         config,
         frame_ms: median(&totals),
         frame_ms_samples: totals,
+        timestamp_ms: median(&stamps),
         passes: per_pass.into_iter().map(|(pass, v)| PassMs { pass, ms: median(&v) }).collect(),
         flip: flip.mean,
         psnr_db: psnr.is_finite().then_some(psnr),
@@ -568,20 +592,36 @@ pub fn table(s: &SceneSweep) -> String {
         if s.reference.cached { ", cached" } else { "" },
         s.reference.made.noise_flip
     );
-    t += &format!("  {:<16} {:>9} {:>8} {:>9} {:>7}\n", "configuration", "frame ms", "FLIP", "PSNR dB", "SSIM");
+    t += &format!(
+        "  {:<16} {:>9} {:>9} {:>8} {:>9} {:>7}\n",
+        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM"
+    );
     let mut order: Vec<&Point> = s.points.iter().collect();
     order.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     for p in order {
         let psnr = p.psnr_db.map_or("inf".to_string(), |v| format!("{v:.2}"));
         t += &format!(
-            "{} {:<16} {:>9.2} {:>8.4} {:>9} {:>7.4}\n",
+            "{} {:<16} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4}\n",
             if p.pareto { "*" } else { " " },
             p.name,
             p.frame_ms,
+            p.timestamp_ms,
             p.flip,
             psnr,
             p.ssim
         );
+    }
+    for full in s.points.iter().filter(|p| p.config.full) {
+        let planned = Config { full: false, ..full.config };
+        if let Some(p) = s.points.iter().find(|p| p.config == planned) {
+            t += &format!(
+                "  frame plan ({}) against every pass ({}): {:+.1}% frame time, FLIP {:+.4}\n",
+                p.name,
+                full.name,
+                100.0 * (p.frame_ms / full.frame_ms - 1.0),
+                p.flip - full.flip
+            );
+        }
     }
     t
 }

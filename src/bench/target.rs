@@ -8,7 +8,7 @@
 
 use anyhow::{Result, bail};
 
-/// One measured configuration: GPU frame time and error against the reference (lower is
+/// One measured configuration: frame time and error against the reference (lower is
 /// better for both).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Measured {

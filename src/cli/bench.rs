@@ -23,6 +23,9 @@ enum BenchCommand {
     /// Build time, memory and rays/s of both ray backends on the same primary, shadow and
     /// incoherent rays (the definition is in src/bench/rays.rs).
     Rays(RaysArgs),
+    /// Per-pass GPU time of the default frame at one or more sizes, with the denoiser's
+    /// (svgf_*) share.
+    Frame(super::bench_frame::FrameArgs),
     /// Many frames of an animated scene (default: 10,000 of the Cornell box at 32x32): host
     /// and device memory sampled every N frames after a warm-up, and frame times.
     Soak(super::soak::SoakArgs),
@@ -59,6 +62,7 @@ struct RaysArgs {
 pub fn run(a: &BenchArgs) -> Result<()> {
     match &a.what {
         BenchCommand::Rays(r) => run_rays(r),
+        BenchCommand::Frame(f) => super::bench_frame::run(f),
         BenchCommand::Soak(s) => super::soak::run(s),
         BenchCommand::Sweep(s) => run_sweep(s),
     }

@@ -2,6 +2,7 @@
 //! this one holds the shared arguments and turns errors into a message and a non-zero exit.
 
 mod bench;
+mod bench_frame;
 mod info;
 mod plan;
 mod reference;
@@ -140,6 +141,43 @@ impl SceneArgs {
 }
 
 /// The built-in default scene (assets/default/cornell.gltf).
+/// What lights the scene from outside (render and reference take the same flags, so a
+/// hybrid frame can be compared with its reference).
+#[derive(Args, Clone, Debug)]
+pub struct EnvironmentArgs {
+    /// Equirectangular environment map (.exr or .hdr; row 0 is straight up) lighting the scene.
+    #[arg(long, conflicts_with = "sky")]
+    env: Option<PathBuf>,
+    /// Multiplier on the environment map's radiance.
+    #[arg(long, default_value_t = 1.0, requires = "env")]
+    env_intensity: f32,
+    /// Constant environment radiance R,G,B (black when neither this nor --env is given).
+    #[arg(long, value_parser = parse_rgb)]
+    sky: Option<glam::Vec3>,
+}
+
+impl EnvironmentArgs {
+    pub fn environment(&self) -> crate::render::Environment {
+        use crate::render::Environment;
+        match (&self.env, self.sky) {
+            (Some(path), _) => Environment::Map(path.clone(), self.env_intensity),
+            (None, Some(c)) => Environment::Constant(c),
+            (None, None) => Environment::default(),
+        }
+    }
+}
+
+/// Parses `R,G,B` (three non-negative numbers).
+fn parse_rgb(s: &str) -> Result<glam::Vec3, String> {
+    let parts: Vec<Option<f32>> = s.split(',').map(|p| p.trim().parse::<f32>().ok()).collect();
+    match parts.as_slice() {
+        [Some(r), Some(g), Some(b)] if [r, g, b].iter().all(|c| c.is_finite() && **c >= 0.0) => {
+            Ok(glam::Vec3::new(*r, *g, *b))
+        }
+        _ => Err(format!("{s}: expected R,G,B with three non-negative numbers, e.g. 0.5,0.6,0.8")),
+    }
+}
+
 pub fn default_scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default/cornell.gltf")
 }

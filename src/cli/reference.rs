@@ -2,15 +2,14 @@
 //! (the `pathtrace` pass), one sample per pixel per submission so that no single GPU call runs
 //! long on a slow device, and writes the mean as linear EXR.
 
-use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, finish_validation, parse_size};
 use crate::backend;
 use crate::gpu::{Context, ContextOptions, ShaderLibrary};
 use crate::image_io::{self, Texels};
 use crate::passes::pathtrace;
-use crate::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
+use crate::render::{CameraChoice, RenderMode, Renderer, Settings};
 use anyhow::{Result, bail};
 use clap::Args;
-use glam::Vec3;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -38,15 +37,8 @@ pub struct ReferenceArgs {
     /// Replace an existing output file.
     #[arg(long)]
     force: bool,
-    /// Equirectangular environment map (.exr or .hdr; row 0 is straight up) lighting the scene.
-    #[arg(long, conflicts_with = "sky")]
-    env: Option<PathBuf>,
-    /// Multiplier on the environment map's radiance.
-    #[arg(long, default_value_t = 1.0, requires = "env")]
-    env_intensity: f32,
-    /// Constant environment radiance R,G,B (black when neither this nor --env is given).
-    #[arg(long, value_parser = parse_rgb)]
-    sky: Option<Vec3>,
+    #[command(flatten)]
+    environment: EnvironmentArgs,
     /// Scattering events per path at most; 1 renders direct light only. Russian roulette ends
     /// paths well before the default, which only guards against endless paths.
     #[arg(long, default_value_t = 256)]
@@ -57,17 +49,6 @@ pub struct ReferenceArgs {
     /// Animation time of the pose to render, seconds.
     #[arg(long, default_value_t = 0.0)]
     time: f32,
-}
-
-/// Parses `R,G,B` (three non-negative numbers).
-fn parse_rgb(s: &str) -> Result<Vec3, String> {
-    let parts: Vec<Option<f32>> = s.split(',').map(|p| p.trim().parse::<f32>().ok()).collect();
-    match parts.as_slice() {
-        [Some(r), Some(g), Some(b)] if [r, g, b].iter().all(|c| c.is_finite() && **c >= 0.0) => {
-            Ok(Vec3::new(*r, *g, *b))
-        }
-        _ => Err(format!("{s}: expected R,G,B with three non-negative numbers, e.g. 0.5,0.6,0.8")),
-    }
 }
 
 pub fn run(a: &ReferenceArgs) -> Result<()> {
@@ -86,11 +67,7 @@ pub fn run(a: &ReferenceArgs) -> Result<()> {
         }
         image_io::check_overwrite(p, a.force)?;
     }
-    let environment = match (&a.env, a.sky) {
-        (Some(path), _) => Environment::Map(path.clone(), a.env_intensity),
-        (None, Some(c)) => Environment::Constant(c),
-        (None, None) => Environment::default(),
-    };
+    let environment = a.environment.environment();
     let scene = a.scene.load()?;
     let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;

@@ -1,7 +1,7 @@
 //! `hybrid-rt render`: renders N frames of a scene and writes the last one; optionally dumps
 //! every pass's outputs.
 
-use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, finish_validation, parse_size};
 use crate::backend;
 use crate::bench;
 use crate::capture::Capture;
@@ -42,6 +42,17 @@ pub struct RenderArgs {
     /// Turn temporal anti-aliasing off (it is on by default).
     #[arg(long)]
     no_taa: bool,
+    /// Turn the SVGF denoiser off: the raw one-sample-per-pixel signals are composited.
+    #[arg(long)]
+    no_denoise: bool,
+    /// Bounces of indirect light traced by the gi pass.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
+    gi_bounces: Option<u32>,
+    /// Seed of the frame's random streams (same seed, settings and backend: same image).
+    #[arg(long)]
+    seed: Option<u32>,
+    #[command(flatten)]
+    environment: EnvironmentArgs,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -53,11 +64,11 @@ pub struct RenderArgs {
     shader_dir: Option<PathBuf>,
     /// Pick the most accurate configuration whose GPU frame time is at most this many ms, from
     /// this scene's speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
-    #[arg(long, value_name = "MS", conflicts_with_all = ["target_error", "no_taa"])]
+    #[arg(long, value_name = "MS", conflicts_with_all = ["target_error", "no_taa", "no_denoise", "gi_bounces"])]
     target_ms: Option<f64>,
     /// Pick the fastest configuration whose HDR-FLIP error is at most this, from this scene's
     /// speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
-    #[arg(long, value_name = "FLIP", conflicts_with = "no_taa")]
+    #[arg(long, value_name = "FLIP", conflicts_with_all = ["no_taa", "no_denoise", "gi_bounces"])]
     target_error: Option<f64>,
 }
 
@@ -83,8 +94,22 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     let scene_name = scene.name.clone();
-    let mut settings =
-        Settings { width, height, exposure: a.exposure, taa: !a.no_taa, full: a.full, ..Default::default() };
+    let mut settings = Settings {
+        width,
+        height,
+        exposure: a.exposure,
+        taa: !a.no_taa,
+        denoiser: !a.no_denoise,
+        full: a.full,
+        environment: a.environment.environment(),
+        ..Default::default()
+    };
+    if let Some(b) = a.gi_bounces {
+        settings.gi.bounces = b;
+    }
+    if let Some(seed) = a.seed {
+        settings.seed = seed;
+    }
     let camera = a.camera.clone().unwrap_or_default();
     let target = match (a.target_ms, a.target_error) {
         (Some(t), _) => Some(bench::target::Target::Ms(t)),
