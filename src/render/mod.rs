@@ -226,6 +226,12 @@ impl Renderer {
         })
     }
 
+    /// The name of the shadow visibility the lighting reads this frame: the filtered one when
+    /// the plan keeps soft shadows, the hard-shadow trace's otherwise.
+    pub fn shadow_visibility(&self) -> &'static str {
+        if self.plan.soft_shadows { passes::shadows::VISIBILITY } else { passes::shadows::HARD_VISIBILITY }
+    }
+
     /// Rebuilds the frame's passes (pipelines and images) from `shaders` and `self.settings`,
     /// keeping the scene on the GPU: the viewer's settings changes, resizes and shader hot
     /// reload. On error the old frame stays as it was. Temporal histories start anew.
