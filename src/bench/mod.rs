@@ -5,6 +5,7 @@
 pub mod chart;
 pub mod rays;
 pub mod soak;
+pub mod stability;
 pub mod sweep;
 pub mod target;
 
