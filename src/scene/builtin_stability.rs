@@ -52,6 +52,10 @@ fn camera(name: &str, yfov: f32, node: u32) -> Camera {
     Camera { name: name.into(), yfov, aspect_ratio: None, znear: 0.05, zfar: Some(100.0), node }
 }
 
+/// Scene animations loop over their longest channel; a last key this late holds every
+/// channel's final value for the whole suite.
+const HOLD: f32 = 1000.0;
+
 fn light(name: &str, kind: LightKind, intensity: f32, node: u32) -> Light {
     Light { name: name.into(), kind, color: Vec3::ONE, intensity, range: None, radius: 0.0, node }
 }
@@ -143,15 +147,19 @@ pub fn slide() -> Scene {
                 node: s.instances[cube as usize].node,
                 property: Property::Translation,
                 interpolation: Interpolation::Linear,
-                times: vec![0.0, SLIDE_END],
-                values: vec![Vec4::new(-CUBE_TRAVEL, 0.0, -2.0, 0.0), Vec4::new(CUBE_TRAVEL, 0.0, -2.0, 0.0)],
+                times: vec![0.0, SLIDE_END, HOLD],
+                values: vec![
+                    Vec4::new(-CUBE_TRAVEL, 0.0, -2.0, 0.0),
+                    Vec4::new(CUBE_TRAVEL, 0.0, -2.0, 0.0),
+                    Vec4::new(CUBE_TRAVEL, 0.0, -2.0, 0.0),
+                ],
             },
             Channel {
                 node: front + PAN as u32,
                 property: Property::Rotation,
                 interpolation: Interpolation::Linear,
-                times: vec![PAN_START, PAN_END],
-                values: vec![yaw(PAN_YAW), yaw(-PAN_YAW)],
+                times: vec![PAN_START, PAN_END, HOLD],
+                values: vec![yaw(PAN_YAW), yaw(-PAN_YAW), yaw(-PAN_YAW)],
             },
         ],
     });
@@ -192,8 +200,8 @@ pub fn lights() -> Scene {
             node: eye + 1,
             property: Property::Translation,
             interpolation: Interpolation::Step,
-            times: vec![0.0, MOVE_TIME],
-            values: vec![MOVER_FROM.extend(0.0), MOVER_TO.extend(0.0)],
+            times: vec![0.0, MOVE_TIME, HOLD],
+            values: vec![MOVER_FROM.extend(0.0), MOVER_TO.extend(0.0), MOVER_TO.extend(0.0)],
         }],
     });
     s
@@ -290,14 +298,16 @@ pub fn grazing() -> Scene {
 
 /// Facts about `firefly`.
 pub mod firefly_facts {
-    /// The emitter: a 3 cm square of radiance EMISSION facing down from just under the ceiling,
-    /// out of the camera's view. It is the only light.
+    /// The emitter: a 3 cm square of radiance EMISSION 5 cm under the ceiling, facing it, out of
+    /// the camera's view. It is the only light: the room sees only the small, very bright spot
+    /// it makes on the ceiling (also out of view), through one bounce.
     pub const EMISSION: f32 = 20000.0;
     pub const SIDE: f32 = 0.03;
 }
 
 /// The white room of `lights` with a glossy floor, lit only by a tiny emitter of very high
-/// radiance: every path that finds it by chance instead of by light sampling is a firefly.
+/// radiance facing the ceiling: light sampling finds the emitter, but the hot spot it makes is
+/// found only by bounce rays that happen to hit it, each a firefly.
 pub fn firefly() -> Scene {
     use firefly_facts::*;
     let mut s = Scene { name: "builtin:stability-firefly".into(), ..Default::default() };
@@ -306,7 +316,7 @@ pub fn firefly() -> Scene {
     s.materials.push(Material { emissive_factor: Vec3::splat(EMISSION), ..diffuse("emitter", 0.0) });
     room(&mut s, 0);
     s.meshes[0].material = 1;
-    add(&mut s, "emitter", quad(Vec3::new(0.0, 2.95, -1.5), Vec3::X * SIDE, Vec3::Z * SIDE, 2), Vec3::ZERO);
+    add(&mut s, "emitter", quad(Vec3::new(0.0, 2.95, 2.5), Vec3::Z * SIDE, Vec3::X * SIDE, 2), Vec3::ZERO);
     let eye = s.nodes.len() as u32;
     s.nodes.push(looking("eye", Vec3::new(0.0, 1.2, 4.0), Vec3::new(0.0, 0.8, -1.0)));
     s.cameras.push(camera("eye", 0.8, eye));
