@@ -70,9 +70,7 @@ fn add(s: &mut Scene, name: &str, mesh: super::Mesh, at: Vec3) -> u32 {
 
 /// Facts about `slide` that the suite checks against.
 pub mod slide_facts {
-    /// The sunlit back wall, the floor and the sliding cube (instance indices).
-    pub const WALL_INSTANCE: u32 = 0;
-    pub const FLOOR_INSTANCE: u32 = 1;
+    /// The sliding cube's instance (after the wall's and the floor's).
     pub const CUBE_INSTANCE: u32 = 2;
     /// The cube slides from x = -CUBE_TRAVEL to +CUBE_TRAVEL between t = 0 and t = SLIDE_END,
     /// from out of view on the left to out of view on the right of the `front` camera, and
@@ -343,7 +341,9 @@ mod tests {
     fn the_cube_leaves_the_front_view_and_the_pan_turns() {
         use slide_facts::*;
         let s = slide();
-        let cube = s.instances[CUBE_INSTANCE as usize].node as usize;
+        let cube = &s.instances[CUBE_INSTANCE as usize];
+        assert_eq!(s.meshes[cube.mesh as usize].name, "cuboid");
+        let cube = cube.node as usize;
         let at = |t: f32| s.evaluate(t).world[cube].w_axis.x;
         assert_eq!(at(0.0), -CUBE_TRAVEL);
         assert_eq!(at(SLIDE_END + 1.0), CUBE_TRAVEL);
