@@ -112,13 +112,13 @@ pub fn run_all(rig: &Rig, progress: &dyn Fn(&str)) -> Result<Vec<Row>> {
 /// value over its bound.
 pub fn table(rows: &[Row]) -> String {
     let mut s = format!(
-        "{:<14} {:<34} {:>10} {:>10} {:>10} {:>10}  unit\n",
+        "{:<14} {:<40} {:>10} {:>10} {:>10} {:>10}  unit\n",
         "scenario", "metric", "denoised", "bound", "raw", "bound"
     );
     let cell = |v: f64, bound: f64| format!("{}{v:.4}", if v <= bound { "" } else { "!" });
     for r in rows {
         s.push_str(&format!(
-            "{:<14} {:<34} {:>10} {:>10.4} {:>10} {:>10.4}  {}\n",
+            "{:<14} {:<40} {:>10} {:>10.4} {:>10} {:>10.4}  {}\n",
             r.scenario,
             r.metric,
             cell(r.denoised, r.denoised_bound),
