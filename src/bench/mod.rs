@@ -6,6 +6,7 @@ pub mod chart;
 pub mod frame;
 pub mod rays;
 pub mod soak;
+pub mod stability;
 pub mod sweep;
 pub mod target;
 

@@ -33,6 +33,10 @@ enum BenchCommand {
     /// path-traced reference) over configurations of the hybrid frame; writes JSON and a chart
     /// (PNG and SVG) with the Pareto front, and caches the result for `render --target-ms`.
     Sweep(SweepArgs),
+    /// Scripted scenes at the known failure points (camera cut, fast pan, ghosting, light lag,
+    /// leaking, acne, fireflies, disocclusion), each metric denoised beside the raw frame's
+    /// (src/bench/stability.rs).
+    Stability(super::stability::StabilityArgs),
 }
 
 #[derive(Args)]
@@ -65,6 +69,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         BenchCommand::Frame(f) => super::bench_frame::run(f),
         BenchCommand::Soak(s) => super::soak::run(s),
         BenchCommand::Sweep(s) => run_sweep(s),
+        BenchCommand::Stability(s) => super::stability::run(s),
     }
 }
 

@@ -8,6 +8,7 @@ mod plan;
 mod reference;
 mod render;
 mod soak;
+mod stability;
 mod view;
 
 use crate::backend::BackendChoice;

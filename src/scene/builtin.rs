@@ -3,10 +3,10 @@
 
 use super::animation::{Channel, Interpolation, Property};
 use super::{Animation, Camera, Instance, Material, Mesh, Node, Scene, Vertex};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use glam::{Quat, Vec3, Vec4};
 
-/// Names accepted after `builtin:`.
+/// Names accepted after `builtin:` (with the stability suite's, `super::builtin_stability::NAMES`).
 pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test"];
 
 pub fn by_name(name: &str) -> Result<Scene> {
@@ -16,7 +16,10 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "shadow-test" => Ok(shadow_test()),
         "soft-shadow-test" => Ok(soft_shadow_test()),
         "checker-test" => Ok(checker_test()),
-        _ => bail!("builtin:{name}: no such built-in scene (known: {})", NAMES.join(", ")),
+        _ => super::builtin_stability::by_name(name).ok_or_else(|| {
+            let known = [NAMES, super::builtin_stability::NAMES].concat().join(", ");
+            anyhow::anyhow!("builtin:{name}: no such built-in scene (known: {known})")
+        }),
     }
 }
 
@@ -361,7 +364,7 @@ pub fn checker_test() -> Scene {
     s
 }
 
-fn node(name: &str, t: Vec3) -> Node {
+pub(super) fn node(name: &str, t: Vec3) -> Node {
     Node { name: name.into(), parent: None, translation: t, rotation: Quat::IDENTITY, scale: Vec3::ONE }
 }
 

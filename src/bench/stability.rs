@@ -1,0 +1,541 @@
+//! `hybrid-rt bench stability`: the stability suite. Scripted scenes
+//! (src/scene/builtin_stability.rs) at the known failure points of a real-time ray tracer, each
+//! with a metric, rendered twice: **denoised** (the shipped temporal path: SVGF and TAA on) and
+//! **raw** (both off: one frame's ray-traced estimate, no history), so that a regression of the
+//! temporal machinery shows beside the undenoised result.
+//!
+//! Every metric is "lower is better" and works on linear HDR luminance
+//! (`crate::metrics::luminance`) or on the G-buffer and shadow visibility. Each [`Measure`]
+//! carries the bound tests/stability.rs asserts: measured on lavapipe at [`BOUND_SIZE`] with a
+//! margin (the measurements are in the comments of the tests); at other sizes the bounds are
+//! only a guide.
+
+use crate::backend::Backend;
+use crate::gpu::{Context, ShaderLibrary};
+use crate::image_io::CpuImage;
+use crate::metrics::luminance;
+use crate::passes::shadows::HARD_VISIBILITY;
+use crate::render::{CameraChoice, Renderer, Settings, ViewOverride};
+use crate::scene::Scene;
+use crate::scene::builtin_stability::{self as scenes, grazing_facts, leak_facts, lights_facts, slide_facts};
+use anyhow::{Context as _, Result};
+use glam::{Vec2, Vec3};
+use serde::Serialize;
+use std::sync::Arc;
+
+/// The image size the bounds were measured at.
+pub const BOUND_SIZE: (u32, u32) = (48, 48);
+
+/// Animation step between frames (30 frames a second): the scenes' speeds are per second.
+pub const FRAME_DT: f32 = 1.0 / 30.0;
+
+/// What the scenarios render with.
+pub struct Rig<'a> {
+    pub ctx: &'a Arc<Context>,
+    pub shaders: &'a ShaderLibrary,
+    pub backend: Backend,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// One number a scenario measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct Measure {
+    pub metric: &'static str,
+    pub unit: &'static str,
+    pub value: f64,
+    /// The largest value the suite accepts for this configuration (see the module comment).
+    pub bound: f64,
+}
+
+impl Measure {
+    pub fn within_bound(&self) -> bool {
+        self.value <= self.bound
+    }
+}
+
+fn measure(metric: &'static str, unit: &'static str, value: f64, bound: f64) -> Measure {
+    Measure { metric, unit, value, bound }
+}
+
+/// A scenario of the suite: its name and the function that renders it in one configuration
+/// (`true`: denoised).
+pub type ScenarioFn = fn(&Rig, bool) -> Result<Vec<Measure>>;
+
+/// Every scenario, in the order of the list.
+pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
+    ("camera cut", camera_cut),
+    ("fast pan", fast_pan),
+    ("moving object", moving_object),
+    ("moving light", moving_light),
+    ("light off", light_off),
+    ("leaking", leaking),
+    ("grazing floor", grazing_floor),
+    ("fireflies", fireflies),
+];
+
+/// One row of the bench's table: a metric of a scenario in both configurations.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scenario: &'static str,
+    pub metric: &'static str,
+    pub unit: &'static str,
+    pub denoised: f64,
+    pub raw: f64,
+    pub denoised_bound: f64,
+    pub raw_bound: f64,
+}
+
+/// Runs every scenario denoised and raw; `progress` hears each scenario's name first.
+pub fn run_all(rig: &Rig, progress: &dyn Fn(&str)) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for &(scenario, run) in SCENARIOS {
+        progress(scenario);
+        let denoised = run(rig, true).with_context(|| format!("{scenario}, denoised"))?;
+        let raw = run(rig, false).with_context(|| format!("{scenario}, raw"))?;
+        for (d, r) in denoised.iter().zip(&raw) {
+            rows.push(Row {
+                scenario,
+                metric: d.metric,
+                unit: d.unit,
+                denoised: d.value,
+                raw: r.value,
+                denoised_bound: d.bound,
+                raw_bound: r.bound,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The table the bench prints: each metric denoised and raw, with its bounds and `!` beside a
+/// value over its bound.
+pub fn table(rows: &[Row]) -> String {
+    let mut s = format!(
+        "{:<14} {:<40} {:>10} {:>10} {:>10} {:>10}  unit\n",
+        "scenario", "metric", "denoised", "bound", "raw", "bound"
+    );
+    let cell = |v: f64, bound: f64| format!("{}{v:.4}", if v <= bound { "" } else { "!" });
+    for r in rows {
+        s.push_str(&format!(
+            "{:<14} {:<40} {:>10} {:>10.4} {:>10} {:>10.4}  {}\n",
+            r.scenario,
+            r.metric,
+            cell(r.denoised, r.denoised_bound),
+            r.denoised_bound,
+            cell(r.raw, r.raw_bound),
+            r.raw_bound,
+            r.unit
+        ));
+    }
+    s
+}
+
+/// The frame as shipped (`denoised`: SVGF and TAA) or the raw frame (neither).
+fn renderer(rig: &Rig, scene: Scene, denoised: bool, start_time: f32, camera: usize) -> Result<Renderer> {
+    let settings = Settings {
+        width: rig.width,
+        height: rig.height,
+        denoiser: denoised,
+        taa: denoised,
+        frame_dt: FRAME_DT,
+        start_time,
+        ..Default::default()
+    };
+    Renderer::new(rig.ctx, rig.shaders, scene, settings, &CameraChoice::Index(camera), rig.backend)
+}
+
+/// Renders a frame and returns its linear HDR luminance.
+fn next_luminance(r: &mut Renderer) -> Result<Vec<f32>> {
+    r.render_frame()?;
+    let out = r.hdr_output().to_string();
+    Ok(plane(&r.read_output(&out)?))
+}
+
+fn plane(img: &CpuImage) -> Vec<f32> {
+    (0..img.height)
+        .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+        .map(|(x, y)| luminance(img.get(x, y, 0), img.get(x, y, 1), img.get(x, y, 2)))
+        .collect()
+}
+
+fn ids(img: &CpuImage) -> Vec<u32> {
+    (0..img.height).flat_map(|y| (0..img.width).map(move |x| img.get_u32(x, y, 0))).collect()
+}
+
+/// The mean of `count` raw frames at the renderer's current pose: a reference with the noise
+/// of `count` samples per pixel.
+fn mean_of_frames(r: &mut Renderer, count: u32) -> Result<Vec<f32>> {
+    let mut sum = next_luminance(r)?;
+    for _ in 1..count {
+        for (s, v) in sum.iter_mut().zip(next_luminance(r)?) {
+            *s += v;
+        }
+    }
+    Ok(sum.into_iter().map(|v| v / count as f32).collect())
+}
+
+/// `sum |a - b| / sum b` over the pixels `keep` selects (0 when they hold no light).
+fn relative_error(a: &[f32], b: &[f32], keep: impl Fn(usize) -> bool) -> f64 {
+    let (mut err, mut total) = (0.0f64, 0.0f64);
+    for i in (0..a.len()).filter(|&i| keep(i)) {
+        err += (a[i] as f64 - b[i] as f64).abs();
+        total += b[i] as f64;
+    }
+    if total > 0.0 { err / total } else { 0.0 }
+}
+
+fn median(v: &mut [f32]) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f32::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Frames to converge on before a change is made.
+const WARM_UP: u32 = 8;
+
+/// **Camera cut** in `stability-slide`: `WARM_UP` frames on the sunlit wall, then a cut to the
+/// `aside` camera, which looks at floor behind the first camera (points the old view cannot
+/// have seen: reprojected, they land behind its eye). Metrics: the relative mean absolute
+/// luminance error against the new view's reference (the mean of 8 raw frames) of the first
+/// frame after the cut, and the mean over the 8 frames after it.
+pub fn camera_cut(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    let errors = camera_cut_errors(rig, denoised, true)?;
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    let (first_bound, mean_bound) = if denoised { (0.15, 0.15) } else { (0.25, 0.25) };
+    Ok(vec![
+        measure("first frame after the cut: rel. error", "fraction", errors[0], first_bound),
+        measure("8 frames after the cut: mean rel. error", "fraction", mean, mean_bound),
+    ])
+}
+
+/// The errors of the 8 frames after the cut of [`camera_cut`]. Without `reset` the camera
+/// changes without telling the renderer (the deliberately bad configuration: the temporal
+/// passes keep their history and must rely on reprojection alone).
+pub fn camera_cut_errors(rig: &Rig, denoised: bool, reset: bool) -> Result<Vec<f64>> {
+    use slide_facts::*;
+    // After the slide: the cube is out of view and the scene is still.
+    let still = SLIDE_END + 0.1;
+    let mut reference = renderer(rig, scenes::slide(), false, still, ASIDE)?;
+    let truth = mean_of_frames(&mut reference, 8)?;
+    drop(reference);
+    let mut r = renderer(rig, scenes::slide(), denoised, still, FRONT)?;
+    for _ in 0..WARM_UP {
+        r.render_frame()?;
+    }
+    if reset {
+        r.set_camera(&CameraChoice::Index(ASIDE))?;
+    } else {
+        let cam = &r.scene.cameras[ASIDE];
+        let world = r.pose_of(r.frame_index).world[cam.node as usize];
+        let aside = ViewOverride {
+            view: world.inverse(),
+            yfov: cam.yfov,
+            znear: cam.znear,
+            zfar: cam.zfar.unwrap_or(f32::INFINITY),
+        };
+        r.set_view_override(Some(aside));
+    }
+    (0..8).map(|_| Ok(relative_error(&next_luminance(&mut r)?, &truth, |_| true))).collect()
+}
+
+/// **Fast pan** in `stability-slide`: the `pan` camera holds still for `WARM_UP` frames, then
+/// turns 2.8 degrees a frame (about 2.5 pixels at 48 pixels across) for 18 frames. Metric:
+/// the relative mean absolute luminance error, halfway through the pan and at its last frame,
+/// against the mean of 8 raw frames at the same pose (smear, lost detail and history that
+/// reprojection got wrong all count).
+pub fn fast_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use slide_facts::*;
+    let start = PAN_START - WARM_UP as f32 * FRAME_DT;
+    let pan_frames = ((PAN_END - PAN_START) / FRAME_DT).round() as u32;
+    let mut r = renderer(rig, scenes::slide(), denoised, start, PAN)?;
+    let mut reference = renderer(rig, scenes::slide(), false, start, PAN)?;
+    let mut errors = Vec::new();
+    for frame in 0..WARM_UP + pan_frames {
+        let l = next_luminance(&mut r)?;
+        if frame == WARM_UP + pan_frames / 2 || frame == WARM_UP + pan_frames - 1 {
+            reference.set_time(Some(r.time_of(frame)));
+            let truth = mean_of_frames(&mut reference, 8)?;
+            errors.push(relative_error(&l, &truth, |_| true));
+        }
+    }
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    Ok(vec![measure("during the pan: rel. error", "fraction", mean, if denoised { 0.35 } else { 0.25 })])
+}
+
+/// **Moving object** in `stability-slide`: a dark cube slides across the sunlit checkerboard
+/// wall at about 4 pixels a frame (48 pixels across), then leaves the view; the background is
+/// the mean of the last 4 frames, 10 frames after it left. Two metrics:
+/// - ghosting: over the trail (pixels the cube covered in one of the 3 frames before and no
+///   longer covers), the luminance missing against the background, as a fraction of the
+///   background's: `sum (bg - Y) / sum bg`. Signed, so that zero-mean noise does not count
+///   (a dark ghost on a bright wall only ever takes light away);
+/// - disocclusion: over the pixels uncovered this very frame, the relative mean absolute error
+///   against the background (noise of a restarted history counts here).
+pub fn moving_object(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use slide_facts::*;
+    let start = -(WARM_UP as f32) * FRAME_DT;
+    let frames = ((SLIDE_END - start) / FRAME_DT).round() as u32 + 10;
+    let mut r = renderer(rig, scenes::slide(), denoised, start, FRONT)?;
+    let mut seen: Vec<(Vec<f32>, Vec<u32>)> = Vec::new();
+    for _ in 0..frames {
+        let l = next_luminance(&mut r)?;
+        seen.push((l, ids(&r.read_output("gbuffer.ids")?)));
+    }
+    let n = seen[0].0.len();
+    let background: Vec<f32> =
+        (0..n).map(|i| seen[seen.len() - 4..].iter().map(|(l, _)| l[i]).sum::<f32>() / 4.0).collect();
+    let cube = |f: &(Vec<f32>, Vec<u32>), i: usize| f.1[i] == CUBE_INSTANCE;
+    let (mut missing, mut trail_light, mut uncovered) = (0.0f64, 0.0f64, Vec::new());
+    for t in 3..seen.len() {
+        for i in (0..n).filter(|&i| !cube(&seen[t], i)) {
+            if (t - 3..t).any(|s| cube(&seen[s], i)) {
+                missing += (background[i] - seen[t].0[i]) as f64;
+                trail_light += background[i] as f64;
+            }
+            if cube(&seen[t - 1], i) {
+                uncovered.push((t, i));
+            }
+        }
+    }
+    if uncovered.is_empty() {
+        anyhow::bail!("the cube never crossed the view");
+    }
+    let (mut err, mut total) = (0.0f64, 0.0f64);
+    for &(t, i) in &uncovered {
+        err += (seen[t].0[i] - background[i]).abs() as f64;
+        total += background[i] as f64;
+    }
+    Ok(vec![
+        measure("ghosting: trail light missing", "fraction", missing / trail_light, 0.06),
+        measure("disocclusion: rel. error, uncovered px", "fraction", err / total, 0.25),
+    ])
+}
+
+/// The step response of a region's mean luminance to a change made after `WARM_UP` frames:
+/// `r_k = |m_k - m_end| / |m_before - m_end|` for the frames k = 0.. after the change, with
+/// m_end the mean of the last 4 of 16 frames. Returns (r_0, frames until r stays <= 0.1).
+/// A scalar per frame, so that the noise of single raw frames averages out.
+fn step_response(
+    r: &mut Renderer,
+    change: impl FnOnce(&mut Renderer),
+    region: impl Fn(usize) -> bool,
+) -> Result<(f64, f64)> {
+    let mean = |l: &[f32]| {
+        let v: Vec<f64> = (0..l.len()).filter(|&i| region(i)).map(|i| l[i] as f64).collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    let mut before = 0.0;
+    for _ in 0..WARM_UP {
+        before = mean(&next_luminance(r)?);
+    }
+    change(r);
+    let after: Vec<f64> = (0..16).map(|_| next_luminance(r).map(|l| mean(&l))).collect::<Result<_>>()?;
+    let end = after[12..].iter().sum::<f64>() / 4.0;
+    let step = (before - end).abs();
+    if step <= 0.0 {
+        anyhow::bail!("the change made no difference to the image");
+    }
+    let residual: Vec<f64> = after.iter().map(|m| (m - end).abs() / step).collect();
+    let lag = residual.iter().rposition(|&v| v > 0.1).map_or(0, |i| i + 1);
+    Ok((residual[0], lag as f64))
+}
+
+/// **Moving light** in `stability-lights` (without the light `switched`): the point light
+/// `mover` jumps from the left to the right half of the white room. Metrics on the left half's mean luminance (which loses the
+/// light): the fraction of the step still missing in the first frame after the jump, and the
+/// lag, frames until it stays within 10 % of the step of its final value.
+pub fn moving_light(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    // Frame WARM_UP - 1 half a frame before the jump, frame WARM_UP half a frame after.
+    let start = lights_facts::MOVE_TIME - (WARM_UP as f32 - 0.5) * FRAME_DT;
+    // The other light off throughout, so that its noisy bounce light does not hide the step.
+    let mut scene = scenes::lights();
+    scene.lights.retain(|l| l.name != lights_facts::SWITCHED);
+    let mut r = renderer(rig, scene, denoised, start, 0)?;
+    let width = rig.width as usize;
+    let (first, lag) = step_response(&mut r, |_| {}, |i| i % width < width / 2)?;
+    Ok(vec![
+        measure("first frame: step missing", "fraction", first, if denoised { 0.3 } else { 0.05 }),
+        measure("lag (within 10% of the step)", "frames", lag, if denoised { 6.0 } else { 0.0 }),
+    ])
+}
+
+/// **Light off** in `stability-lights`: the light `switched` goes off between two frames (its
+/// intensity set to 0 in the renderer's scene: lights reach the GPU from it every frame). The
+/// light tables keep its old sampling weight, which only costs the light sampling some
+/// efficiency. Metrics as for [`moving_light`], over the whole image.
+pub fn light_off(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    let still = lights_facts::MOVE_TIME + 0.1;
+    let mut r = renderer(rig, scenes::lights(), denoised, still, 0)?;
+    let switch_off = |r: &mut Renderer| {
+        for l in r.scene.lights.iter_mut().filter(|l| l.name == lights_facts::SWITCHED) {
+            l.intensity = 0.0;
+        }
+    };
+    let (first, lag) = step_response(&mut r, switch_off, |_| true)?;
+    Ok(vec![
+        measure("first frame: step missing", "fraction", first, if denoised { 0.45 } else { 0.05 }),
+        measure("lag (within 10% of the step)", "frames", lag, if denoised { 10.0 } else { 0.0 }),
+    ])
+}
+
+/// **Leaking** in `stability-leak`: a sealed room of zero-thickness walls with a point light
+/// 2 cm outside one of them. Metrics, relative to the median luminance of the lit outer face
+/// (seen by the `corner` camera):
+/// - inside: the mean luminance inside the room (the true value is 0), after 6 frames;
+/// - edge bleed: the mean luminance of the unlit outer face next to the room's edge (within 2
+///   pixels of the lit face on screen), where a spatial filter would blur light across the
+///   edge (the true value is 0).
+pub fn leaking(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use leak_facts::*;
+    let mut r = renderer(rig, scenes::leak(), denoised, 0.0, INSIDE)?;
+    let mut inside = Vec::new();
+    for _ in 0..6 {
+        inside = next_luminance(&mut r)?;
+    }
+    r.set_camera(&CameraChoice::Index(CORNER))?;
+    let mut outside = Vec::new();
+    for _ in 0..6 {
+        outside = next_luminance(&mut r)?;
+    }
+    let id = ids(&r.read_output("gbuffer.ids")?);
+    let (w, h) = (rig.width as i64, rig.height as i64);
+    let mut lit: Vec<f32> = (0..id.len()).filter(|&i| id[i] == PLUS_X_INSTANCE).map(|i| outside[i]).collect();
+    let lit = median(&mut lit) as f64;
+    if lit <= 0.0 {
+        anyhow::bail!("the corner camera sees no lit face");
+    }
+    let near_lit = |i: usize| {
+        let (x, y) = (i as i64 % w, i as i64 / w);
+        (-2..=2).any(|dy| {
+            (-2..=2).any(|dx| {
+                let (u, v) = (x + dx, y + dy);
+                u >= 0 && v >= 0 && u < w && v < h && id[(v * w + u) as usize] == PLUS_X_INSTANCE
+            })
+        })
+    };
+    let edge: Vec<f64> =
+        (0..id.len()).filter(|&i| id[i] == MINUS_Z_INSTANCE && near_lit(i)).map(|i| outside[i] as f64).collect();
+    if edge.is_empty() {
+        anyhow::bail!("the corner camera sees no edge between the lit and the unlit face");
+    }
+    let inside_mean = inside.iter().map(|&v| v as f64).sum::<f64>() / inside.len() as f64;
+    let edge_mean = edge.iter().sum::<f64>() / edge.len() as f64;
+    Ok(vec![
+        measure("inside the sealed room / lit face", "fraction", inside_mean / lit, 1e-4),
+        measure("unlit face at the edge / lit face", "fraction", edge_mean / lit, 1e-4),
+    ])
+}
+
+/// **Grazing floor** in `stability-grazing`: the sun 5 degrees above a floor with only a
+/// sphere on it. Over the last 4 of 8 frames:
+/// - acne: the fraction of floor pixels outside the sphere's shadow (a 20 % larger sphere, for
+///   the jitter of the pixel's position) whose shadow ray says "occluded";
+/// - speckle: the fraction of those pixels darker than half the median of them (acne or noise
+///   as the viewer sees it: directional light on a flat floor is uniform);
+/// - terminator: the fraction of the coarse sphere's pixels whose shading normal faces the
+///   light (n.l > 0.1) that are shadowed: the faceted geometry occluding its own smooth
+///   shading near the terminator.
+pub fn grazing_floor(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use grazing_facts::*;
+    let mut r = renderer(rig, scenes::grazing(), denoised, 0.0, 0)?;
+    let to_light = -light_dir();
+    let size = Vec2::new(rig.width as f32, rig.height as f32);
+    let (mut floor, mut acne, mut dark) = (0usize, 0usize, 0usize);
+    let (mut facing, mut self_shadowed) = (0usize, 0usize);
+    for frame in 0..8 {
+        let l = next_luminance(&mut r)?;
+        if frame < 4 {
+            continue;
+        }
+        let imgs = r.read_outputs(&["gbuffer.ids", "gbuffer.normal", HARD_VISIBILITY])?;
+        let (id, view) = (ids(&imgs[0]), r.last_view.context("no view after a frame")?);
+        let mut open = Vec::new();
+        for (i, &inst) in id.iter().enumerate() {
+            let (x, y) = (i as u32 % rig.width, i as u32 / rig.width);
+            let shadowed = imgs[2].get(x, y, 0) < 0.5;
+            if inst == FLOOR_INSTANCE {
+                let d = view.ray_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), size);
+                let p = view.position + d * (-view.position.y / d.y);
+                if ray_hits_sphere(p, to_light, SPHERE_CENTRE, 1.2 * SPHERE_RADIUS) {
+                    continue;
+                }
+                floor += 1;
+                acne += usize::from(shadowed);
+                open.push(l[i]);
+            } else if inst == SPHERE_INSTANCE {
+                let n = Vec3::new(imgs[1].get(x, y, 0), imgs[1].get(x, y, 1), imgs[1].get(x, y, 2));
+                if n.normalize_or_zero().dot(to_light) > 0.1 {
+                    facing += 1;
+                    self_shadowed += usize::from(shadowed);
+                }
+            }
+        }
+        let half_median = 0.5 * median(&mut open.clone());
+        dark += open.iter().filter(|&&v| v < half_median).count();
+    }
+    if floor == 0 || facing == 0 {
+        anyhow::bail!("the camera sees no open floor ({floor} pixels) or no lit sphere ({facing} pixels)");
+    }
+    Ok(vec![
+        measure("acne: open floor px shadowed", "fraction", acne as f64 / floor as f64, 0.005),
+        measure("speckle: open floor px < median/2", "fraction", dark as f64 / floor as f64, 0.01),
+        measure("terminator: lit sphere px shadowed", "fraction", self_shadowed as f64 / facing as f64, 0.03),
+    ])
+}
+
+/// Whether the ray `o + t d` (t > 0) meets the sphere (`d` unit length).
+fn ray_hits_sphere(o: Vec3, d: Vec3, centre: Vec3, radius: f32) -> bool {
+    let oc = o - centre;
+    let b = oc.dot(d);
+    let c = oc.length_squared() - radius * radius;
+    let disc = b * b - c;
+    disc >= 0.0 && -b + disc.sqrt() > 0.0
+}
+
+/// **Fireflies** in `stability-firefly`: a white room with a glossy floor lit only through the
+/// hot spot a 3 cm emitter of radiance 20000 makes on the ceiling, both out of view. After 8 frames: the fraction of pixels more than 10
+/// times as bright as the median of their 5x5 neighbourhood (and above 0.01: not darkness
+/// against darkness), and the peak-to-mean luminance ratio of the image.
+pub fn fireflies(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    let mut r = renderer(rig, scenes::firefly(), denoised, 0.0, 0)?;
+    let mut l = Vec::new();
+    for _ in 0..8 {
+        l = next_luminance(&mut r)?;
+    }
+    let emissive = plane(&r.read_output("gbuffer.emissive")?);
+    let (w, h) = (rig.width as i64, rig.height as i64);
+    let mut outliers = 0usize;
+    let mut counted = 0usize;
+    for i in (0..l.len()).filter(|&i| emissive[i] <= 0.0) {
+        let (x, y) = (i as i64 % w, i as i64 / w);
+        let mut around: Vec<f32> = (-2..=2)
+            .flat_map(|dy| (-2..=2).map(move |dx| (x + dx, y + dy)))
+            .filter(|&(u, v)| u >= 0 && v >= 0 && u < w && v < h)
+            .map(|(u, v)| l[(v * w + u) as usize])
+            .collect();
+        counted += 1;
+        if l[i] > 0.01 && l[i] > 10.0 * median(&mut around) {
+            outliers += 1;
+        }
+    }
+    let kept: Vec<f64> = (0..l.len()).filter(|&i| emissive[i] <= 0.0).map(|i| l[i] as f64).collect();
+    let mean = kept.iter().sum::<f64>() / kept.len().max(1) as f64;
+    let peak = kept.iter().cloned().fold(0.0, f64::max);
+    Ok(vec![
+        measure(
+            "pixels > 10x their 5x5 median",
+            "fraction",
+            outliers as f64 / counted.max(1) as f64,
+            if denoised { 0.002 } else { 0.03 },
+        ),
+        measure(
+            "peak / mean luminance",
+            "ratio",
+            if mean > 0.0 { peak / mean } else { 0.0 },
+            if denoised { 100.0 } else { 5000.0 },
+        ),
+    ])
+}

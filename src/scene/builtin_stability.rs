@@ -1,0 +1,366 @@
+//! Scripted scenes of the stability suite (src/bench/stability.rs): each puts one known failure
+//! point of a real-time ray tracer in front of a camera, small enough for a CPU Vulkan driver.
+//! Reachable as `builtin:NAME` like the other built-in scenes.
+//!
+//! | scene | failure points |
+//! | --- | --- |
+//! | `stability-slide` | camera cut, fast pan, ghosting and disocclusion behind a moving cube |
+//! | `stability-lights` | lag after a light moves and after one switches off |
+//! | `stability-leak` | light leaking through a zero-thickness wall into a sealed room |
+//! | `stability-grazing` | shadow acne on a floor lit at a grazing angle, shadow terminator |
+//! | `stability-firefly` | fireflies from a tiny, very bright emitter |
+
+use super::animation::{Channel, Interpolation, Property};
+use super::builtin::{cuboid, node, quad, uv_sphere};
+use super::{Animation, Camera, Instance, Light, LightKind, Material, Node, Scene};
+use glam::{Mat4, Quat, Vec3, Vec4};
+
+/// Names accepted after `builtin:` for the scenes of this file.
+pub const NAMES: &[&str] =
+    &["stability-slide", "stability-lights", "stability-leak", "stability-grazing", "stability-firefly"];
+
+/// The scene called `name`, if it is one of [`NAMES`].
+pub fn by_name(name: &str) -> Option<Scene> {
+    match name {
+        "stability-slide" => Some(slide()),
+        "stability-lights" => Some(lights()),
+        "stability-leak" => Some(leak()),
+        "stability-grazing" => Some(grazing()),
+        "stability-firefly" => Some(firefly()),
+        _ => None,
+    }
+}
+
+fn diffuse(name: &str, albedo: f32) -> Material {
+    Material {
+        name: name.into(),
+        base_color_factor: Vec4::new(albedo, albedo, albedo, 1.0),
+        metallic_factor: 0.0,
+        roughness_factor: 1.0,
+        ..Default::default()
+    }
+}
+
+/// A node at `eye` whose -Z axis (a camera's or a light's view direction) points at `target`.
+fn looking(name: &str, eye: Vec3, target: Vec3) -> Node {
+    let mut n = node(name, eye);
+    n.rotation = Quat::from_mat4(&Mat4::look_at_rh(eye, target, Vec3::Y).inverse());
+    n
+}
+
+fn camera(name: &str, yfov: f32, node: u32) -> Camera {
+    Camera { name: name.into(), yfov, aspect_ratio: None, znear: 0.05, zfar: Some(100.0), node }
+}
+
+/// Scene animations loop over their longest channel; a last key this late holds every
+/// channel's final value for the whole suite.
+const HOLD: f32 = 1000.0;
+
+fn light(name: &str, kind: LightKind, intensity: f32, node: u32) -> Light {
+    Light { name: name.into(), kind, color: Vec3::ONE, intensity, range: None, radius: 0.0, node }
+}
+
+/// Adds `mesh` drawn at a new node `name` at `at`; returns the instance index.
+fn add(s: &mut Scene, name: &str, mesh: super::Mesh, at: Vec3) -> u32 {
+    s.meshes.push(mesh);
+    s.nodes.push(node(name, at));
+    s.instances.push(Instance { mesh: s.meshes.len() as u32 - 1, node: s.nodes.len() as u32 - 1 });
+    s.instances.len() as u32 - 1
+}
+
+/// Facts about `slide` that the suite checks against.
+pub mod slide_facts {
+    /// The sliding cube's instance (after the wall's and the floor's).
+    pub const CUBE_INSTANCE: u32 = 2;
+    /// The cube slides from x = -CUBE_TRAVEL to +CUBE_TRAVEL between t = 0 and t = SLIDE_END,
+    /// from out of view on the left to out of view on the right of the `front` camera, and
+    /// stays there.
+    pub const CUBE_TRAVEL: f32 = 4.0;
+    pub const SLIDE_END: f32 = 0.8;
+    /// The `pan` camera turns from PAN_YAW to -PAN_YAW (radians) between PAN_START and
+    /// PAN_END: 2.8 degrees a frame at 30 frames a second.
+    pub const PAN_YAW: f32 = 0.44;
+    pub const PAN_START: f32 = 1.0;
+    pub const PAN_END: f32 = 1.6;
+    /// Cameras: `front` (static, the wall), `pan`, `aside` (the cut's target: the floor behind
+    /// the other two, which they never see).
+    pub const FRONT: usize = 0;
+    pub const PAN: usize = 1;
+    pub const ASIDE: usize = 2;
+}
+
+/// A sunlit wall with a checkerboard albedo behind a dark cube that slides across the view;
+/// a floor whose bounce light reaches the wall (a noisy signal for the denoiser). Cameras:
+/// `front` looks at the wall, `pan` (at the same spot) turns fast across it once the cube has
+/// gone, `aside` looks down at the floor behind them.
+pub fn slide() -> Scene {
+    use slide_facts::*;
+    let mut s = Scene { name: "builtin:stability-slide".into(), ..Default::default() };
+    let size = 32u32;
+    let cell = size / 8;
+    let mut rgba = Vec::with_capacity((size * size * 4) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            // sRGB 230 and 110: linear albedo 0.79 and 0.16.
+            let v = if (x / cell + y / cell) % 2 == 0 { 230 } else { 110 };
+            rgba.extend_from_slice(&[v, v, v, 255]);
+        }
+    }
+    s.images.push(super::Image { name: "checker".into(), width: size, height: size, rgba8: rgba });
+    s.textures.push(super::Texture {
+        image: Some(0),
+        sampler: super::Sampler {
+            mag_filter: super::Filter::Nearest,
+            min_filter: super::Filter::Nearest,
+            mipmaps: false,
+            wrap_s: super::Wrap::Repeat,
+            wrap_t: super::Wrap::Repeat,
+        },
+    });
+    let mut wall = diffuse("wall", 1.0);
+    wall.base_color_texture =
+        Some(super::TextureRef { texture: 0, uv_set: 0, transform: glam::Mat3::from_scale(glam::Vec2::new(4.0, 1.5)) });
+    s.materials.push(wall);
+    s.materials.push(diffuse("floor", 0.6));
+    s.materials.push(diffuse("cube", 0.03));
+    add(&mut s, "wall", quad(Vec3::new(0.0, 1.0, -4.0), Vec3::X * 16.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
+    add(&mut s, "floor", quad(Vec3::new(0.0, -1.0, 0.0), Vec3::Z * 12.0, Vec3::X * 16.0, 1), Vec3::ZERO);
+    let cube = add(&mut s, "cube", cuboid(Vec3::splat(0.5), 2), Vec3::new(-CUBE_TRAVEL, 0.0, -2.0));
+    let eye = Vec3::new(0.0, 0.0, 2.0);
+    let front = s.nodes.len() as u32;
+    s.nodes.push(node("front", eye));
+    s.nodes.push(node("pan", eye));
+    s.nodes.push(looking("aside", Vec3::new(0.0, 0.5, 5.0), Vec3::new(0.0, -1.0, 3.0)));
+    for (i, name) in ["front", "pan", "aside"].into_iter().enumerate() {
+        s.cameras.push(camera(name, 0.9, front + i as u32));
+    }
+    let sun = s.nodes.len() as u32;
+    s.nodes.push(looking("sun", Vec3::ZERO, Vec3::new(0.3, -0.5, -1.0)));
+    s.lights.push(light("sun", LightKind::Directional, 3.0, sun));
+    let yaw = |a: f32| Vec4::from(Quat::from_rotation_y(a));
+    s.animations.push(Animation {
+        name: "slide".into(),
+        channels: vec![
+            Channel {
+                node: s.instances[cube as usize].node,
+                property: Property::Translation,
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, SLIDE_END, HOLD],
+                values: vec![
+                    Vec4::new(-CUBE_TRAVEL, 0.0, -2.0, 0.0),
+                    Vec4::new(CUBE_TRAVEL, 0.0, -2.0, 0.0),
+                    Vec4::new(CUBE_TRAVEL, 0.0, -2.0, 0.0),
+                ],
+            },
+            Channel {
+                node: front + PAN as u32,
+                property: Property::Rotation,
+                interpolation: Interpolation::Linear,
+                times: vec![PAN_START, PAN_END, HOLD],
+                values: vec![yaw(PAN_YAW), yaw(-PAN_YAW), yaw(-PAN_YAW)],
+            },
+        ],
+    });
+    s
+}
+
+/// Facts about `lights`.
+pub mod lights_facts {
+    use glam::Vec3;
+    /// The point light `mover` jumps from MOVER_FROM to MOVER_TO at MOVE_TIME (seconds).
+    pub const MOVER: &str = "mover";
+    pub const MOVER_FROM: Vec3 = Vec3::new(-1.8, 2.0, -1.0);
+    pub const MOVER_TO: Vec3 = Vec3::new(1.8, 2.0, -1.0);
+    pub const MOVE_TIME: f32 = 0.5;
+    /// The point light the suite switches off (by setting its intensity to 0 between frames).
+    pub const SWITCHED: &str = "switched";
+}
+
+/// A white room open toward the camera, lit by two point lights: `mover` jumps from the left
+/// to the right half of the room at `MOVE_TIME`, `switched` stays where it is (the suite
+/// switches it off). White walls make a large part of the light indirect, the part that
+/// temporal accumulation can hold on to.
+pub fn lights() -> Scene {
+    use lights_facts::*;
+    let mut s = Scene { name: "builtin:stability-lights".into(), ..Default::default() };
+    s.materials.push(diffuse("white", 0.8));
+    room(&mut s, 0);
+    let eye = s.nodes.len() as u32;
+    s.nodes.push(looking("eye", Vec3::new(0.0, 1.5, 4.5), Vec3::new(0.0, 1.2, 0.0)));
+    s.cameras.push(camera("eye", 0.9, eye));
+    s.nodes.push(node(MOVER, MOVER_FROM));
+    s.lights.push(light(MOVER, LightKind::Point, 12.0, eye + 1));
+    s.nodes.push(node(SWITCHED, Vec3::new(0.0, 2.6, -2.0)));
+    s.lights.push(light(SWITCHED, LightKind::Point, 12.0, eye + 2));
+    s.animations.push(Animation {
+        name: "move".into(),
+        channels: vec![Channel {
+            node: eye + 1,
+            property: Property::Translation,
+            interpolation: Interpolation::Step,
+            times: vec![0.0, MOVE_TIME, HOLD],
+            values: vec![MOVER_FROM.extend(0.0), MOVER_TO.extend(0.0), MOVER_TO.extend(0.0)],
+        }],
+    });
+    s
+}
+
+/// Floor (y = 0), ceiling (y = 3), back (z = -3) and side walls (x = +-3) of a room open
+/// toward +Z, facing in, in `material`.
+fn room(s: &mut Scene, material: u32) {
+    let (x, y, z) = (Vec3::X * 6.0, Vec3::Y * 3.0, Vec3::Z * 6.0);
+    add(s, "floor", quad(Vec3::ZERO, z, x, material), Vec3::ZERO);
+    add(s, "ceiling", quad(Vec3::new(0.0, 3.0, 0.0), x, z, material), Vec3::ZERO);
+    add(s, "back", quad(Vec3::new(0.0, 1.5, -3.0), x, y, material), Vec3::ZERO);
+    add(s, "left", quad(Vec3::new(-3.0, 1.5, 0.0), y, z, material), Vec3::ZERO);
+    add(s, "right", quad(Vec3::new(3.0, 1.5, 0.0), z, y, material), Vec3::ZERO);
+}
+
+/// Facts about `leak`.
+pub mod leak_facts {
+    use glam::Vec3;
+    /// The sealed room is the box [-1, 1] x [0, 2] x [-1, 1]; its six walls are zero-thickness
+    /// quads, instances 0..6 in the order -X, +X, floor, ceiling, -Z, +Z.
+    pub const HALF: f32 = 1.0;
+    pub const PLUS_X_INSTANCE: u32 = 1;
+    pub const MINUS_Z_INSTANCE: u32 = 4;
+    /// The point light, outside the room, 2 cm from the +X wall.
+    pub const LIGHT: Vec3 = Vec3::new(HALF + 0.02, 1.0, 0.0);
+    /// Cameras: `inside` the room, looking at the +X wall and the floor along it; `corner`
+    /// outside, seeing the lit outer face of the +X wall beside the unlit outer face of the -Z
+    /// wall across the room's edge.
+    pub const INSIDE: usize = 0;
+    pub const CORNER: usize = 1;
+}
+
+/// A sealed room with zero-thickness walls and a bright point light just outside one of them.
+/// Nothing outside the room reflects light and the environment is black, so inside the room
+/// and on the outer faces the light cannot see, the true radiance is exactly 0.
+pub fn leak() -> Scene {
+    use leak_facts::*;
+    let mut s = Scene { name: "builtin:stability-leak".into(), ..Default::default() };
+    // Double-sided: each wall is seen from inside by one camera and from outside by the other.
+    s.materials.push(Material { double_sided: true, ..diffuse("wall", 0.8) });
+    let h = HALF;
+    let c = Vec3::new(0.0, h, 0.0);
+    let (x, y, z) = (Vec3::X * 2.0 * h, Vec3::Y * 2.0 * h, Vec3::Z * 2.0 * h);
+    // Quads facing out of the room.
+    add(&mut s, "-x", quad(c - Vec3::X * h, z, y, 0), Vec3::ZERO);
+    add(&mut s, "+x", quad(c + Vec3::X * h, y, z, 0), Vec3::ZERO);
+    add(&mut s, "floor", quad(c - Vec3::Y * h, x, z, 0), Vec3::ZERO);
+    add(&mut s, "ceiling", quad(c + Vec3::Y * h, z, x, 0), Vec3::ZERO);
+    add(&mut s, "-z", quad(c - Vec3::Z * h, y, x, 0), Vec3::ZERO);
+    add(&mut s, "+z", quad(c + Vec3::Z * h, x, y, 0), Vec3::ZERO);
+    let cams = s.nodes.len() as u32;
+    s.nodes.push(looking("inside", Vec3::new(-0.8, 1.4, 0.8), Vec3::new(1.0, 0.5, -0.3)));
+    s.nodes.push(looking("corner", Vec3::new(3.0, 1.3, -3.0), Vec3::new(1.0, 1.0, -1.0)));
+    s.cameras.push(camera("inside", 1.2, cams));
+    s.cameras.push(camera("corner", 0.8, cams + 1));
+    s.nodes.push(node("lamp", LIGHT));
+    s.lights.push(light("lamp", LightKind::Point, 4.0, cams + 2));
+    s
+}
+
+/// Facts about `grazing`.
+pub mod grazing_facts {
+    use glam::Vec3;
+    pub const FLOOR_INSTANCE: u32 = 0;
+    pub const SPHERE_INSTANCE: u32 = 1;
+    /// The low-poly sphere (12 segments, 6 rings) of radius SPHERE_RADIUS rests on the floor.
+    pub const SPHERE_CENTRE: Vec3 = Vec3::new(0.0, 0.5, -1.0);
+    pub const SPHERE_RADIUS: f32 = 0.5;
+    /// Direction the sunlight travels: 5 degrees above the horizon.
+    pub fn light_dir() -> Vec3 {
+        let e = 5f32.to_radians();
+        Vec3::new(-e.cos() * 0.8, -e.sin(), -e.cos() * 0.6).normalize()
+    }
+}
+
+/// A large floor under a sun 5 degrees above the horizon, with nothing on it but a coarse
+/// smooth-shaded sphere: every floor point outside the sphere's shadow is lit (speckle there is
+/// shadow acne), and the sphere's lit side ends at a terminator that the faceted geometry makes
+/// hard to shade.
+pub fn grazing() -> Scene {
+    use grazing_facts::*;
+    let mut s = Scene { name: "builtin:stability-grazing".into(), ..Default::default() };
+    s.materials.push(diffuse("white", 0.8));
+    add(&mut s, "floor", quad(Vec3::ZERO, Vec3::Z * 40.0, Vec3::X * 40.0, 0), Vec3::ZERO);
+    add(&mut s, "sphere", uv_sphere(SPHERE_RADIUS, 12, 6, 0), SPHERE_CENTRE);
+    let eye = s.nodes.len() as u32;
+    s.nodes.push(looking("eye", Vec3::new(0.3, 1.2, 2.0), Vec3::new(0.0, 0.2, -1.5)));
+    s.cameras.push(camera("eye", 1.0, eye));
+    s.nodes.push(looking("sun", Vec3::ZERO, light_dir()));
+    s.lights.push(light("sun", LightKind::Directional, 3.0, eye + 1));
+    s
+}
+
+/// Facts about `firefly`.
+pub mod firefly_facts {
+    /// The emitter: a 3 cm square of radiance EMISSION 5 cm under the ceiling, facing it, out of
+    /// the camera's view. It is the only light: the room sees only the small, very bright spot
+    /// it makes on the ceiling (also out of view), through one bounce.
+    pub const EMISSION: f32 = 20000.0;
+    pub const SIDE: f32 = 0.03;
+}
+
+/// The white room of `lights` with a glossy floor, lit only by a tiny emitter of very high
+/// radiance facing the ceiling: light sampling finds the emitter, but the hot spot it makes is
+/// found only by bounce rays that happen to hit it, each a firefly.
+pub fn firefly() -> Scene {
+    use firefly_facts::*;
+    let mut s = Scene { name: "builtin:stability-firefly".into(), ..Default::default() };
+    s.materials.push(diffuse("white", 0.8));
+    s.materials.push(Material { roughness_factor: 0.3, ..diffuse("glossy", 0.5) });
+    s.materials.push(Material { emissive_factor: Vec3::splat(EMISSION), ..diffuse("emitter", 0.0) });
+    room(&mut s, 0);
+    s.meshes[0].material = 1;
+    add(&mut s, "emitter", quad(Vec3::new(0.0, 2.95, 2.5), Vec3::Z * SIDE, Vec3::X * SIDE, 2), Vec3::ZERO);
+    let eye = s.nodes.len() as u32;
+    s.nodes.push(looking("eye", Vec3::new(0.0, 1.2, 4.0), Vec3::new(0.0, 0.8, -1.0)));
+    s.cameras.push(camera("eye", 0.8, eye));
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scene_builds_with_its_cameras_and_is_small() {
+        for name in NAMES {
+            let s = by_name(name).unwrap();
+            assert!(!s.cameras.is_empty(), "{name}: no camera");
+            let triangles: usize = s.meshes.iter().map(|m| m.triangle_count()).sum();
+            assert!(triangles < 5000, "{name}: {triangles} triangles");
+            assert!(s.lights.iter().all(|l| (l.node as usize) < s.nodes.len()), "{name}: light without node");
+        }
+        assert!(by_name("no-such-scene").is_none());
+    }
+
+    #[test]
+    fn the_cube_leaves_the_front_view_and_the_pan_turns() {
+        use slide_facts::*;
+        let s = slide();
+        let cube = &s.instances[CUBE_INSTANCE as usize];
+        assert_eq!(s.meshes[cube.mesh as usize].name, "cuboid");
+        let cube = cube.node as usize;
+        let at = |t: f32| s.evaluate(t).world[cube].w_axis.x;
+        assert_eq!(at(0.0), -CUBE_TRAVEL);
+        assert_eq!(at(SLIDE_END + 1.0), CUBE_TRAVEL);
+        let pan = s.cameras[PAN].node as usize;
+        let forward = |t: f32| s.evaluate(t).world[pan].transform_vector3(Vec3::NEG_Z);
+        assert!(forward(PAN_START).x < -0.4 && forward(PAN_END).x > 0.4);
+    }
+
+    /// The room's walls face out of it (the light outside sees the +X wall's front).
+    #[test]
+    fn leak_room_walls_face_out() {
+        let s = leak();
+        for inst in &s.instances {
+            let m = &s.meshes[inst.mesh as usize];
+            let v = m.vertices[0];
+            let (p, n) = (Vec3::from(v.position), Vec3::from(v.normal));
+            assert!((p - Vec3::new(0.0, 1.0, 0.0)).dot(n) > 0.99, "{}: normal {n} at {p}", m.name);
+        }
+    }
+}
