@@ -3,6 +3,7 @@
 
 pub mod brdf;
 pub mod camera;
+mod deform;
 pub mod environment;
 pub mod frame;
 pub mod lights;
@@ -317,7 +318,7 @@ impl Renderer {
         let (graph, scene_gpu, ctx) = (&mut self.graph, &mut self.scene_gpu, &self.ctx);
         self.pool.run(|cmd| {
             let rec = Recorder::new(ctx, cmd);
-            scene_gpu.accel.record_update(&rec)?;
+            scene_gpu.record_update(&rec)?;
             graph.record(&rec, scene_gpu, frame)
         })?;
         self.last_pass_times = self.graph.pass_times();
