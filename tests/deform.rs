@@ -44,6 +44,8 @@ fn render(ctx: &Arc<Context>, backend: Backend) -> (Renderer, Vec<Vec<CpuImage>>
         primary_rays: true,
         frame_dt: FRAME_DT,
         start_time: 0.05,
+        // Not under test here, and the slowest pass of a frame on lavapipe.
+        denoiser: false,
         ..Default::default()
     };
     let scene = builtin::morph_test();

@@ -53,7 +53,7 @@ pub use layout::{
     KIND_SHIFT, MAX_LEAF_SIZE, MeshBvh, MeshRange, NODE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas,
 };
 pub use morton::morton_order;
-pub use refit::{Refit, refit, reserved_rows};
+pub use refit::{Refit, reserved_rows};
 pub use scene_bvh::instance_descs;
 pub use traverse::{Hit, accept_all, any_hit, closest_hit};
 
