@@ -4,9 +4,13 @@
 //! levels after it; row 0 tells the shader where they start. The bottom levels are built
 //! once; the top level is rebuilt on the CPU when instances move and goes through a
 //! host-visible staging buffer and a copy recorded before the next trace.
+//!
+//! A deforming mesh's tree lives in rows reserved for its largest possible tree; each
+//! deformation refits it on the CPU (or rebuilds it, every [`super::REBUILD_EVERY`] refits)
+//! and uploads that mesh's rows and the top level, nothing else.
 
-use super::bvh::{Row, SceneBvh, Tlas};
-use super::{AccelStats, FIRST_BINDING, RayAccel, same_instances};
+use super::bvh::{BuildOptions, MeshBvh, Row, SceneBvh, Tlas, reserved_rows};
+use super::{AccelStats, FIRST_BINDING, RayAccel, RefitTimes, rebuild_due, same_instances};
 use crate::backend::Backend;
 use crate::gpu::{
     self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, Recorder, vk,
@@ -26,6 +30,20 @@ pub struct ComputeAccel {
     dirty: bool,
     last_pose: Pose,
     stats: AccelStats,
+    deforming: Vec<Deforming>,
+    /// The deforming meshes' rows as last refit, one region per mesh; `None` without any.
+    blas_staging: Option<Buffer>,
+    /// Copies from `blas_staging` into `rows` not yet recorded: (src, dst, bytes).
+    blas_copies: Vec<(u64, u64, u64)>,
+    times: RefitTimes,
+}
+
+struct Deforming {
+    mesh: u32,
+    /// Byte offset of the mesh's region in the staging buffer.
+    staging_offset: u64,
+    /// Refits since the tree was last built.
+    refits: u32,
 }
 
 impl ComputeAccel {
@@ -59,9 +77,49 @@ impl ComputeAccel {
             blas_bytes_uncompacted: blas_bytes,
             tlas_bytes,
             upload_bytes_per_update: tlas_bytes,
-            top_level_rebuilds: 0,
+            ..Default::default()
         };
-        Ok(Self { bvh, rows, tlas_staging, tlas_rows, dirty: false, last_pose: pose.clone(), stats })
+        let mut deforming = Vec::new();
+        let mut staging_bytes = 0u64;
+        for mesh in scene.morphs.iter().map(|m| m.mesh) {
+            deforming.push(Deforming { mesh, staging_offset: staging_bytes, refits: 0 });
+            staging_bytes += (bvh.blas.meshes[mesh as usize].rows as usize * size_of::<Row>()) as u64;
+        }
+        let blas_staging = if deforming.is_empty() {
+            None
+        } else {
+            Some(Buffer::new(
+                ctx,
+                "bvh.blas (staging)",
+                staging_bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?)
+        };
+        Ok(Self {
+            bvh,
+            rows,
+            tlas_staging,
+            tlas_rows,
+            dirty: false,
+            last_pose: pose.clone(),
+            stats,
+            deforming,
+            blas_staging,
+            blas_copies: Vec::new(),
+            times: RefitTimes::default(),
+        })
+    }
+
+    /// Rebuilds the top level for `pose` and stages it for the next `record_update`.
+    fn stage_top_level(&mut self, scene: &Scene, pose: &Pose) -> Result<()> {
+        self.bvh.update_instances(scene, pose);
+        let rows = top_level_rows(&self.bvh.tlas, self.tlas_rows)?;
+        self.tlas_staging.write(0, bytemuck::cast_slice(&rows))?;
+        self.dirty = true;
+        self.last_pose = pose.clone();
+        self.stats.top_level_rebuilds += 1;
+        Ok(())
     }
 }
 
@@ -94,13 +152,45 @@ impl RayAccel for ComputeAccel {
         if same_instances(scene, &self.last_pose, pose) {
             return Ok(());
         }
-        self.bvh.update_instances(scene, pose);
-        let rows = top_level_rows(&self.bvh.tlas, self.tlas_rows)?;
-        self.tlas_staging.write(0, bytemuck::cast_slice(&rows))?;
-        self.dirty = true;
-        self.last_pose = pose.clone();
-        self.stats.top_level_rebuilds += 1;
-        Ok(())
+        self.stage_top_level(scene, pose)
+    }
+
+    fn update_geometry(&mut self, scene: &Scene, pose: &Pose, meshes: &[(u32, &[glam::Vec3])]) -> Result<()> {
+        if meshes.is_empty() {
+            return Ok(());
+        }
+        let staging = self.blas_staging.as_mut().ok_or_else(|| anyhow::anyhow!("no deforming meshes"))?;
+        let start = Instant::now();
+        let mut rebuilt = false;
+        for &(mesh, positions) in meshes {
+            let Some(d) = self.deforming.iter_mut().find(|d| d.mesh == mesh) else {
+                bail!("mesh {mesh} deformed, but its BVH has no reserved rows");
+            };
+            let indices = &scene.meshes[mesh as usize].indices;
+            let changed = if rebuild_due(&mut d.refits) {
+                let tree = MeshBvh::build(positions, indices, &BuildOptions::MESH);
+                debug_assert!(tree.rows.len() <= reserved_rows(tree.triangle_count));
+                self.stats.blas_rebuilds += 1;
+                rebuilt = true;
+                self.bvh.blas.replace_mesh(mesh, tree)
+            } else {
+                self.stats.blas_refits += 1;
+                self.bvh.blas.refit_mesh(mesh, positions, indices)
+            };
+            // Only the rows the tree now spans change; the rest of its reserve is never read.
+            let range = &self.bvh.blas.meshes[mesh as usize];
+            let rows = &self.bvh.blas.rows[range.base as usize..range.base as usize + changed.rows];
+            staging.write(d.staging_offset as usize, bytemuck::cast_slice(rows))?;
+            let bytes = (changed.rows * size_of::<Row>()) as u64;
+            let dst = ((self.tlas_rows + range.base as usize) * size_of::<Row>()) as u64;
+            // A mesh deformed twice before a recording is copied once, from its latest rows.
+            self.blas_copies.retain(|c| c.0 != d.staging_offset);
+            self.blas_copies.push((d.staging_offset, dst, bytes));
+        }
+        // Timed with the staging writes: that upload is part of what a refit costs here.
+        self.times.add(rebuilt, start.elapsed().as_secs_f64() * 1e3);
+        // The instances' boxes (and a lone instance's copy of its mesh root) changed.
+        self.stage_top_level(scene, pose)
     }
 
     fn record_update(&mut self, rec: &Recorder) -> Result<()> {
@@ -114,12 +204,18 @@ impl RayAccel for ComputeAccel {
         let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
         rec.memory_barrier((readers, vk::AccessFlags2::SHADER_STORAGE_READ), transfer);
         rec.copy_buffer(&self.tlas_staging, &self.rows, self.tlas_staging.size);
+        if let Some(staging) = &self.blas_staging {
+            rec.copy_buffer_regions(staging, &self.rows, &self.blas_copies);
+        }
+        self.blas_copies.clear();
         rec.memory_barrier(transfer, (readers, vk::AccessFlags2::SHADER_STORAGE_READ));
         self.dirty = false;
         Ok(())
     }
 
     fn stats(&self) -> AccelStats {
-        self.stats.clone()
+        let mut stats = self.stats.clone();
+        self.times.fill(&mut stats);
+        stats
     }
 }

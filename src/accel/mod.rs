@@ -7,6 +7,10 @@
 //!
 //! Instances that move only touch the top level: the TLAS is rebuilt, or the top-level BVH is
 //! rebuilt on the CPU and re-uploaded (bytes grow with instances, not triangles).
+//!
+//! Deforming meshes (morph targets) touch their own bottom level too: each frame that moves
+//! their vertices refits it (a BLAS update, or a bottom-up refit of the CPU tree) and every
+//! [`REBUILD_EVERY`] refits rebuilds it instead; the top level is rebuilt after either.
 
 pub mod bvh;
 mod compute;
@@ -20,6 +24,25 @@ use std::sync::Arc;
 
 /// First set-0 binding owned by the ray backend.
 pub const FIRST_BINDING: u32 = 8;
+
+/// A deforming mesh's bottom level is refit this many times, then rebuilt from scratch. A
+/// refit keeps the tree split for the shape it was built for: as the mesh moves away from
+/// that shape, sibling boxes overlap more and rays visit more nodes. A rebuild every 16
+/// deformed frames (half a second at 30 Hz) bounds that drift while most frames pay only
+/// for a refit, which costs a fraction of a build and never moves the tree in memory.
+pub const REBUILD_EVERY: u32 = 16;
+
+/// Advances a deforming mesh's count of refits since its last build; true when this
+/// deformation must rebuild instead (then the count starts over). Both backends keep the same
+/// schedule, so their trees are rebuilt on the same frames.
+fn rebuild_due(refits: &mut u32) -> bool {
+    *refits += 1;
+    if *refits >= REBUILD_EVERY {
+        *refits = 0;
+        return true;
+    }
+    false
+}
 
 /// Sizes and times of the structures, for `info`, the bench and the logs.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -35,6 +58,35 @@ pub struct AccelStats {
     /// Bytes uploaded per top-level rebuild.
     pub upload_bytes_per_update: u64,
     pub top_level_rebuilds: u64,
+    /// Bottom levels of deforming meshes refit (BLAS updates, or CPU BVH refits).
+    pub blas_refits: u64,
+    /// Bottom levels of deforming meshes rebuilt (every [`REBUILD_EVERY`] refits).
+    pub blas_rebuilds: u64,
+    /// Mean time of a frame's bottom-level refits (ms): GPU time of the BLAS updates, or CPU
+    /// time of the BVH refits; 0 before the first.
+    pub blas_refit_ms: f64,
+    /// Mean time of a frame's bottom-level work that includes a rebuild (ms), measured alike.
+    pub blas_rebuild_ms: f64,
+}
+
+/// Running means of refit and rebuild times, one sample per frame that did either.
+#[derive(Clone, Copy, Debug, Default)]
+struct RefitTimes {
+    refits: (u64, f64),
+    rebuilds: (u64, f64),
+}
+
+impl RefitTimes {
+    fn add(&mut self, rebuilt: bool, ms: f64) {
+        let slot = if rebuilt { &mut self.rebuilds } else { &mut self.refits };
+        *slot = (slot.0 + 1, slot.1 + ms);
+    }
+
+    fn fill(&self, stats: &mut AccelStats) {
+        let mean = |(n, total): (u64, f64)| if n == 0 { 0.0 } else { total / n as f64 };
+        stats.blas_refit_ms = mean(self.refits);
+        stats.blas_rebuild_ms = mean(self.rebuilds);
+    }
 }
 
 pub trait RayAccel {
@@ -44,7 +96,13 @@ pub trait RayAccel {
     fn write_set(&self, set: &DescriptorSet);
     /// Host side of a new pose: instance transforms changed (no-op when nothing moved).
     fn update_instances(&mut self, scene: &Scene, pose: &Pose) -> Result<()>;
-    /// GPU side: records whatever makes the structures current (the TLAS build).
+    /// Host side of deformed meshes: `meshes` lists each mesh whose vertices changed with its
+    /// new positions (already written to the scene's vertex buffer by the time the next
+    /// [`Self::record_update`] runs). Their bottom levels are refit, or rebuilt every
+    /// [`REBUILD_EVERY`] refits, and the top level follows.
+    fn update_geometry(&mut self, scene: &Scene, pose: &Pose, meshes: &[(u32, &[glam::Vec3])]) -> Result<()>;
+    /// GPU side: records whatever makes the structures current (bottom-level refits, the TLAS
+    /// build).
     fn record_update(&mut self, rec: &Recorder) -> Result<()>;
     fn stats(&self) -> AccelStats;
 }

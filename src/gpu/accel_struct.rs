@@ -277,6 +277,112 @@ pub fn build_blases(
     Ok((result, BlasBuildStats { built_bytes, final_bytes, compacted: true }))
 }
 
+/// Scratch for refitting (UPDATE) or rebuilding in place the bottom levels of deforming
+/// meshes, one region per mesh sized for the larger of the two, so any mix of updates and
+/// rebuilds records in one call.
+pub struct BlasRefitter {
+    _scratch: Buffer,
+    scratch_address: vk::DeviceAddress,
+    offsets: Vec<u64>,
+}
+
+/// What to record for one deforming mesh's bottom level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlasRefit {
+    /// Mode UPDATE: new vertices, same topology; src = dst, cheap, the tree keeps its shape.
+    Update,
+    /// Mode BUILD into the same structure: a tree made for the current vertices.
+    Rebuild,
+}
+
+impl BlasRefitter {
+    /// Scratch for `geometries`, whose structures were built by [`build_blases`] with
+    /// `allow_update` set.
+    pub fn new(ctx: &Arc<Context>, geometries: &[BlasGeometry]) -> Result<Self> {
+        let loader = accel_loader(ctx)?;
+        let align = scratch_alignment(ctx);
+        let mut offsets = Vec::with_capacity(geometries.len());
+        let mut total = 0u64;
+        for g in geometries {
+            let geom = [g.vk()];
+            let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+                .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                .flags(blas_flags(true, false))
+                .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+                .geometries(&geom);
+            let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+            unsafe {
+                loader.get_acceleration_structure_build_sizes(
+                    vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                    &info,
+                    &[g.triangle_count],
+                    &mut sizes,
+                )
+            };
+            offsets.push(total);
+            total += sizes.build_scratch_size.max(sizes.update_scratch_size).div_ceil(align) * align;
+        }
+        let (scratch, scratch_address) = scratch_buffer(ctx, "blas refit scratch", total.max(align))?;
+        Ok(Self { _scratch: scratch, scratch_address, offsets })
+    }
+
+    /// Records the updates and rebuilds of `work` (index into the geometries given to
+    /// [`Self::new`], the structure, what to do) in one build call, after a barrier that
+    /// orders them after earlier traces and builds. No barrier follows: the caller records
+    /// [`Tlas::record_build`] next, whose leading barrier (build writes before build reads)
+    /// is the one barrier between all bottom-level work of the frame and the top level.
+    pub fn record(
+        &self,
+        rec: &Recorder,
+        geometries: &[BlasGeometry],
+        work: &[(usize, &AccelStruct, BlasRefit)],
+    ) -> Result<()> {
+        if work.is_empty() {
+            return Ok(());
+        }
+        let loader = accel_loader(rec.ctx)?;
+        let geoms: Vec<_> = work.iter().map(|&(i, _, _)| [geometries[i].vk()]).collect();
+        let infos: Vec<_> = work
+            .iter()
+            .zip(&geoms)
+            .map(|(&(i, blas, what), geom)| {
+                let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+                    .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                    .flags(blas_flags(true, false))
+                    .dst_acceleration_structure(blas.raw)
+                    .geometries(geom)
+                    .scratch_data(vk::DeviceOrHostAddressKHR {
+                        device_address: self.scratch_address + self.offsets[i],
+                    });
+                match what {
+                    BlasRefit::Update => {
+                        info.mode(vk::BuildAccelerationStructureModeKHR::UPDATE).src_acceleration_structure(blas.raw)
+                    }
+                    BlasRefit::Rebuild => info.mode(vk::BuildAccelerationStructureModeKHR::BUILD),
+                }
+            })
+            .collect();
+        let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> =
+            work.iter().map(|&(i, _, _)| [geometries[i].range()]).collect();
+        let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> = ranges.iter().map(|r| &r[..]).collect();
+        // Earlier traces read these structures, and earlier builds wrote them and the scratch.
+        rec.memory_barrier(
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+                vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
+            ),
+            (
+                vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+                vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
+            ),
+        );
+        unsafe { loader.cmd_build_acceleration_structures(rec.cmd, &infos, &range_refs) };
+        Ok(())
+    }
+}
+
 struct QueryPool {
     ctx: Arc<Context>,
     raw: vk::QueryPool,

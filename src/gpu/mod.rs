@@ -17,7 +17,9 @@ mod timestamps;
 pub mod upload;
 mod validation;
 
-pub use accel_struct::{AccelStruct, BlasBuildStats, BlasGeometry, Tlas, TlasInstance, build_blases};
+pub use accel_struct::{
+    AccelStruct, BlasBuildStats, BlasGeometry, BlasRefit, BlasRefitter, Tlas, TlasInstance, build_blases,
+};
 pub use commands::{CommandPool, image_barrier, memory_barrier};
 pub use context::{Capabilities, Context, ContextOptions};
 pub use descriptors::{Binding, BindingKind, DescriptorSet, DescriptorSetLayout, PushResource};

@@ -213,6 +213,18 @@ impl<'a> Recorder<'a> {
         unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]) };
     }
 
+    /// Copies `(src offset, dst offset, bytes)` regions between two buffers in one command.
+    pub fn copy_buffer_regions(&self, src: &Buffer, dst: &Buffer, regions: &[(u64, u64, u64)]) {
+        if regions.is_empty() {
+            return;
+        }
+        let regions: Vec<vk::BufferCopy> = regions
+            .iter()
+            .map(|&(src_offset, dst_offset, size)| vk::BufferCopy { src_offset, dst_offset, size })
+            .collect();
+        unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &regions) };
+    }
+
     /// Clears a colour image to zero (all bits zero, whatever its format).
     pub fn clear_image(&self, image: &Image) {
         let color = vk::ClearColorValue { uint32: [0; 4] };

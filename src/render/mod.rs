@@ -3,6 +3,7 @@
 
 pub mod brdf;
 pub mod camera;
+mod deform;
 pub mod environment;
 pub mod frame;
 pub mod lights;
@@ -330,7 +331,7 @@ impl Renderer {
         let start = std::time::Instant::now();
         self.pool.run(|cmd| {
             let rec = Recorder::new(ctx, cmd);
-            scene_gpu.accel.record_update(&rec)?;
+            scene_gpu.record_update(&rec)?;
             graph.record(&rec, scene_gpu, frame)
         })?;
         self.last_frame_wall_ms = start.elapsed().as_secs_f64() * 1e3;

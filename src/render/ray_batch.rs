@@ -76,7 +76,7 @@ impl RayBatch {
         for run in 0..=repeats.max(1) {
             pool.run(|cmd| {
                 let rec = Recorder::new(ctx, cmd);
-                scene.accel.record_update(&rec)?;
+                scene.record_update(&rec)?;
                 self.timestamps.reset(cmd);
                 rec.timestamp(&self.timestamps, 0);
                 rec.bind_pipeline(&self.pipeline);

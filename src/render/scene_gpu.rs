@@ -1,7 +1,8 @@
 //! The scene on the GPU: geometry pooled into one vertex and one index buffer, mesh, instance,
 //! material and light tables, textures with CPU-built mip chains, and the scene descriptor set
 //! (set 0) every pass binds. Geometry and textures are uploaded once; the instance table and
-//! the lights are rewritten each frame from the animated pose.
+//! the lights are rewritten each frame from the animated pose, and deforming meshes' vertices
+//! when their morph weights change (src/render/deform.rs).
 
 use super::environment::EnvironmentData;
 use super::lights::{self, LightTables};
@@ -9,7 +10,7 @@ use crate::accel::{self, RayAccel};
 use crate::backend::Backend;
 use crate::gpu::{
     self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, Image,
-    MemoryLocation, Sampler, SamplerDesc, vk,
+    MemoryLocation, Recorder, Sampler, SamplerDesc, vk,
 };
 use crate::scene::{self, LightKind, Pose, Scene};
 use anyhow::Result;
@@ -147,6 +148,7 @@ pub struct SceneGpu {
     pub light_tables: LightTables,
     _brdf_energy: Buffer,
     prev_world: Option<Vec<Mat4>>,
+    deformer: Option<super::deform::Deformer>,
 }
 
 fn mat(m: Mat4) -> [[f32; 4]; 4] {
@@ -227,6 +229,8 @@ impl SceneGpu {
             ranges: mesh_table.iter().map(|m| (m.first_index, m.base_vertex)).collect(),
         };
         let accel = accel::create(backend, ctx, pool, scene, pose, &geometry)?;
+        let base_vertex: Vec<i32> = mesh_table.iter().map(|m| m.base_vertex).collect();
+        let deformer = super::deform::Deformer::new(ctx, scene, &base_vertex, backend == Backend::RayQuery)?;
         let mut bindings = scene_bindings(texture_bindings.len() as u32);
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
@@ -270,6 +274,7 @@ impl SceneGpu {
             light_tables,
             _brdf_energy: brdf_energy,
             prev_world: None,
+            deformer,
         };
         gpu.update_pose(scene, pose)?;
         Ok(gpu)
@@ -299,10 +304,25 @@ impl SceneGpu {
         self.instances.write(0, bytemuck::cast_slice(&instances))?;
         let lights: Vec<GpuLight> = scene.lights.iter().map(|l| gpu_light(l, &pose.world[l.node as usize])).collect();
         self.lights.write(0, bytemuck::cast_slice(&lights))?;
+        if let Some(deformer) = &mut self.deformer {
+            let changed = deformer.update(scene, pose)?;
+            let meshes: Vec<(u32, &[Vec3])> = changed.iter().map(|(m, p)| (*m, p.as_slice())).collect();
+            self.accel.update_geometry(scene, pose, &meshes)?;
+        }
         self.accel.update_instances(scene, pose)?;
         self.light_tables.update(scene, pose)?;
         self.prev_world = Some(pose.world.clone());
         Ok(())
+    }
+
+    /// Records what makes the GPU geometry current before the frame's passes: deformed
+    /// vertices copied into the vertex buffer, then the ray backend's structures refit or
+    /// rebuilt over them.
+    pub fn record_update(&mut self, rec: &Recorder) -> Result<()> {
+        if let Some(deformer) = &mut self.deformer {
+            deformer.record(rec, &self.vertices);
+        }
+        self.accel.record_update(rec)
     }
 
     pub fn write_frame(&mut self, u: &FrameUniforms) -> Result<()> {

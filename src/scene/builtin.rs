@@ -7,7 +7,8 @@ use anyhow::Result;
 use glam::{Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:` (with the stability suite's, `super::builtin_stability::NAMES`).
-pub const NAMES: &[&str] = &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test"];
+pub const NAMES: &[&str] =
+    &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test", "morph-test"];
 
 pub fn by_name(name: &str) -> Result<Scene> {
     match name {
@@ -16,6 +17,7 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "shadow-test" => Ok(shadow_test()),
         "soft-shadow-test" => Ok(soft_shadow_test()),
         "checker-test" => Ok(checker_test()),
+        "morph-test" => Ok(morph_test()),
         _ => super::builtin_stability::by_name(name).ok_or_else(|| {
             let known = [NAMES, super::builtin_stability::NAMES].concat().join(", ");
             anyhow::anyhow!("builtin:{name}: no such built-in scene (known: {known})")
@@ -370,6 +372,98 @@ pub(super) fn node(name: &str, t: Vec3) -> Node {
 
 fn vertex(p: Vec3, n: Vec3, t: Vec3, uv: [f32; 2]) -> Vertex {
     Vertex { position: p.to_array(), normal: n.to_array(), tangent: t.extend(1.0).to_array(), uv0: uv, uv1: uv }
+}
+
+/// Facts about `morph_test` that tests check against.
+pub mod morph_test_facts {
+    /// The camera sits at the origin looking down -Z with this vertical field of view.
+    pub const YFOV: f32 = std::f32::consts::FRAC_PI_3;
+    /// The morphing sheet: CELLS x CELLS quads spanning x, y in [-HALF, HALF] at z = SHEET_Z.
+    pub const SHEET_Z: f32 = -4.0;
+    pub const HALF: f32 = 1.5;
+    pub const CELLS: u32 = 48;
+    /// The weights run through their keys in this many seconds, then loop.
+    pub const PERIOD: f32 = 2.0;
+    pub const BACK_INSTANCE: u32 = 0;
+    pub const SHEET_INSTANCE: u32 = 1;
+    pub const SHEET_MESH: u32 = 1;
+}
+
+/// A back wall and a finely tessellated sheet facing the camera with two morph targets, a
+/// bump towards the camera and a ripple along x, whose weights are animated (linear keys):
+/// the deforming mesh of the BLAS refit and BVH refit tests.
+pub fn morph_test() -> Scene {
+    use morph_test_facts::*;
+    let mut s = Scene { name: "builtin:morph-test".into(), ..Default::default() };
+    s.materials.push(Material {
+        name: "grey".into(),
+        metallic_factor: 0.0,
+        roughness_factor: 0.7,
+        ..Default::default()
+    });
+    s.meshes.push(quad(Vec3::new(0.0, 0.0, -8.0), Vec3::X * 20.0, Vec3::Y * 20.0, 0));
+    let mut vertices = Vec::new();
+    let mut bump = Vec::new();
+    let mut ripple = Vec::new();
+    for j in 0..=CELLS {
+        for i in 0..=CELLS {
+            let (a, b) = (i as f32 / CELLS as f32, j as f32 / CELLS as f32);
+            let (x, y) = ((a * 2.0 - 1.0) * HALF, (b * 2.0 - 1.0) * HALF);
+            vertices.push(vertex(Vec3::new(x, y, 0.0), Vec3::Z, Vec3::X, [a, 1.0 - b]));
+            bump.push(Vec3::Z * 0.8 * (-(x * x + y * y) * 1.5).exp());
+            ripple.push(Vec3::new(0.0, 0.1 * (x * 4.0).cos(), 0.3 * (x * 4.0).sin()));
+        }
+    }
+    let mut indices = Vec::new();
+    let row = CELLS + 1;
+    for j in 0..CELLS {
+        for i in 0..CELLS {
+            let (a, b) = (j * row + i, (j + 1) * row + i);
+            indices.extend_from_slice(&[a, a + 1, b + 1, a, b + 1, b]);
+        }
+    }
+    s.meshes.push(finish("sheet", vertices, indices, 0));
+    s.morphs.push(super::Morph {
+        mesh: SHEET_MESH,
+        targets: vec![
+            super::MorphTarget { positions: bump, normals: Vec::new() },
+            super::MorphTarget { positions: ripple, normals: Vec::new() },
+        ],
+        weights: vec![0.0, 0.0],
+        channels: vec![super::WeightChannel {
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 0.5, 1.0, 1.5, PERIOD],
+            values: vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0],
+            period: PERIOD,
+        }],
+    });
+    s.nodes.push(node("back", Vec3::ZERO));
+    s.nodes.push(node("sheet", Vec3::new(0.0, 0.0, SHEET_Z)));
+    s.nodes.push(node("camera", Vec3::ZERO));
+    s.instances.push(Instance { mesh: 0, node: 0 });
+    s.instances.push(Instance { mesh: SHEET_MESH, node: 1 });
+    s.cameras.push(Camera {
+        name: "origin".into(),
+        yfov: YFOV,
+        aspect_ratio: None,
+        znear: 0.1,
+        zfar: Some(100.0),
+        node: 2,
+    });
+    s.lights.push(super::Light {
+        name: "sun".into(),
+        kind: super::LightKind::Directional,
+        color: Vec3::ONE,
+        intensity: 3.0,
+        range: None,
+        radius: 0.0,
+        node: 2,
+    });
+    // The bounds cover every pose the weights reach (both in [0, 1]), for framing and culling.
+    let (lo, hi) = (Vec3::new(-HALF, -HALF - 0.1, -0.3), Vec3::new(HALF, HALF + 0.1, 1.1));
+    s.meshes[SHEET_MESH as usize].bounds_min = lo;
+    s.meshes[SHEET_MESH as usize].bounds_max = hi;
+    s
 }
 
 fn finish(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>, material: u32) -> Mesh {

@@ -10,8 +10,8 @@
 use super::animation::{Channel, Interpolation, Property};
 use super::limits::{Limits, check_limit};
 use super::{
-    AlphaMode, Animation, Camera, Filter, Image, Instance, Light, LightKind, Material, Mesh, Node, Sampler, Scene,
-    SceneError, Texture, TextureRef, Vertex, Wrap, tangents, uv_transform,
+    AlphaMode, Animation, Camera, Filter, Image, Instance, Light, LightKind, Material, Mesh, Morph, MorphTarget, Node,
+    Sampler, Scene, SceneError, Texture, TextureRef, Vertex, WeightChannel, Wrap, tangents, uv_transform,
 };
 use base64::Engine;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -863,6 +863,9 @@ struct Builder<'a> {
     /// `Scene::nodes` index of each glTF node in the loaded scene.
     scene_node: Vec<Option<u32>>,
     default_material: Option<u32>,
+    /// Per `Scene::morphs` entry: the glTF node whose `weights` (and weight animations) drive
+    /// it, the first node that draws its mesh.
+    morph_driver: Vec<Option<usize>>,
     total_vertices: u64,
     total_triangles: u64,
     total_animation_keys: u64,
@@ -879,6 +882,7 @@ impl<'a> Builder<'a> {
             data,
             scene,
             default_material: None,
+            morph_driver: Vec::new(),
             total_vertices: 0,
             total_triangles: 0,
             total_animation_keys: 0,
@@ -1276,7 +1280,44 @@ impl Builder<'_> {
                 self.scene.instances.push(Instance { mesh, node });
             }
         }
+        self.drive_morphs(i, node, &primitives);
         Ok(())
+    }
+
+    /// Makes glTF node `i` the driver of its meshes' morphs that have none yet: its `weights`
+    /// replace the mesh's, and weight animations of the node play on them. A deforming mesh
+    /// has one shape per frame, so other nodes drawing it show the driver's shape.
+    fn drive_morphs(&mut self, i: usize, node: &json::Node, primitives: &[Option<u32>]) {
+        for &mesh in primitives.iter().flatten() {
+            let Some(k) = self.scene.morphs.iter().position(|m| m.mesh == mesh) else {
+                continue;
+            };
+            match self.morph_driver[k] {
+                None => {
+                    self.morph_driver[k] = Some(i);
+                    if let Some(weights) = &node.weights {
+                        let count = self.scene.morphs[k].targets.len();
+                        let path = format!("nodes[{i}].weights");
+                        self.scene.morphs[k].weights = self.fit_weights(weights, count, &path);
+                    }
+                }
+                Some(driver) if driver != i => self.ctx.warn_once(
+                    "morph-shared",
+                    "a morphing mesh drawn by several nodes takes the shape of the first node's weights in all",
+                ),
+                Some(_) => {}
+            }
+        }
+    }
+
+    /// `weights` for `count` targets: a list of another length is replaced by zeros (with a
+    /// warning), non-finite weights by 0.
+    fn fit_weights(&mut self, weights: &[f32], count: usize, path: &str) -> Vec<f32> {
+        if weights.len() != count {
+            self.ctx.warn(format!("{path}: {} weights for {count} morph targets; using 0", weights.len()));
+            return vec![0.0; count];
+        }
+        weights.iter().map(|w| if w.is_finite() { *w } else { 0.0 }).collect()
     }
 
     /// EXT_mesh_gpu_instancing: one child node per instance, so the instances share the
@@ -1426,10 +1467,22 @@ impl Builder<'_> {
                 Some(name) => name.clone(),
                 None => path.clone(),
             };
-            let id = self.primitive(primitive, &path, name)?.map(|m| {
-                self.scene.meshes.push(m);
-                (self.scene.meshes.len() - 1) as u32
-            });
+            let id = match self.primitive(primitive, &path, name)? {
+                Some((m, targets)) => {
+                    self.scene.meshes.push(m);
+                    let id = (self.scene.meshes.len() - 1) as u32;
+                    if !targets.is_empty() {
+                        let weights = match &mesh.weights {
+                            Some(w) => self.fit_weights(w, targets.len(), &format!("meshes[{index}].weights")),
+                            None => vec![0.0; targets.len()],
+                        };
+                        self.scene.morphs.push(Morph { mesh: id, targets, weights, channels: Vec::new() });
+                        self.morph_driver.push(None);
+                    }
+                    Some(id)
+                }
+                None => None,
+            };
             built.push(id);
         }
         if let Some(slot) = self.mesh_cache.get_mut(index) {
@@ -1438,20 +1491,18 @@ impl Builder<'_> {
         Ok(built)
     }
 
-    /// One primitive as a mesh; `None` (with a warning) for primitives that draw no triangles.
+    /// One primitive as a mesh, with its morph targets (empty when it has none); `None` (with
+    /// a warning) for primitives that draw no triangles.
     fn primitive(
         &mut self,
         prim: &json::mesh::Primitive,
         path: &str,
         name: String,
-    ) -> Result<Option<Mesh>, SceneError> {
+    ) -> Result<Option<(Mesh, Vec<MorphTarget>)>, SceneError> {
         use json::mesh::Semantic;
         let Some(mode) = self.triangle_mode(prim, path) else {
             return Ok(None);
         };
-        if prim.targets.as_ref().is_some_and(|t| !t.is_empty()) {
-            self.ctx.warn_once("morph", "morph targets are not supported: meshes are drawn in their base shape");
-        }
         let Some(position) = prim.attributes.get(&Checked::Valid(Semantic::Positions)) else {
             self.ctx.warn(format!("{path}: no POSITION attribute; the primitive is skipped"));
             return Ok(None);
@@ -1461,10 +1512,84 @@ impl Builder<'_> {
         let Some(mut indices) = self.triangles(prim, mode, vertices.len(), path)? else {
             return Ok(None);
         };
+        let mut targets = self.morph_targets(prim, path, vertices.len())?;
         let material = self.primitive_material(prim, path);
+        let file_vertices = vertices.len();
         self.shading_frame(&mut vertices, &mut indices, present, material, path)?;
-        let (bounds_min, bounds_max) = bounds(&vertices);
-        Ok(Some(Mesh { name, vertices, indices, material, bounds_min, bounds_max }))
+        if !targets.is_empty() && vertices.len() != file_vertices {
+            // Generated flat normals or tangent seams split vertices; the deltas no longer
+            // line up with them.
+            self.ctx.warn(format!(
+                "{path}: morph targets on a primitive without NORMAL, or whose tangents are generated \
+                 with seams, are not supported; the mesh is drawn in its base shape"
+            ));
+            targets.clear();
+        }
+        let (mut bounds_min, mut bounds_max) = bounds(&vertices);
+        // The bounds cover the targets at any weights in [0, 1] (framing and culling use
+        // them); weights outside that range can leave them.
+        for t in &targets {
+            let (lo, hi) = t.positions.iter().fold((Vec3::ZERO, Vec3::ZERO), |(lo, hi), d| (lo.min(*d), hi.max(*d)));
+            (bounds_min, bounds_max) = (bounds_min + lo, bounds_max + hi);
+        }
+        Ok(Some((Mesh { name, vertices, indices, material, bounds_min, bounds_max }, targets)))
+    }
+
+    /// The primitive's morph targets: POSITION and NORMAL deltas, one per vertex. TANGENT
+    /// deltas are ignored (with a warning): tangents keep their base direction.
+    fn morph_targets(
+        &mut self,
+        prim: &json::mesh::Primitive,
+        path: &str,
+        vertex_count: usize,
+    ) -> Result<Vec<MorphTarget>, SceneError> {
+        let Some(targets) = prim.targets.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let mut out = Vec::with_capacity(targets.len().min(64));
+        for (k, target) in targets.iter().enumerate() {
+            let path = format!("{path}.targets[{k}]");
+            if target.tangents.is_some() {
+                self.ctx.warn_once("morph-tangents", "morph target TANGENT deltas are ignored");
+            }
+            let positions = self.morph_deltas(target.positions.map(|a| a.value()), &path, "POSITION", vertex_count)?;
+            let normals = self.morph_deltas(target.normals.map(|a| a.value()), &path, "NORMAL", vertex_count)?;
+            out.push(MorphTarget { positions, normals });
+        }
+        Ok(out)
+    }
+
+    /// One attribute's deltas (empty when absent); they count towards `max_vertices`, which
+    /// bounds their memory like the vertices'. Non-finite deltas become 0 with a warning.
+    fn morph_deltas(
+        &mut self,
+        accessor: Option<usize>,
+        path: &str,
+        name: &str,
+        vertex_count: usize,
+    ) -> Result<Vec<Vec3>, SceneError> {
+        let Some(accessor) = accessor else {
+            return Ok(Vec::new());
+        };
+        let path = format!("{path}.{name}");
+        let deltas = read_floats::<3>(&self.ctx, &self.data, accessor, &path)?;
+        if deltas.len() != vertex_count {
+            return Err(self.ctx.err(format!("{path}: {} deltas, but POSITION has {vertex_count}", deltas.len())));
+        }
+        self.count_vertices(vertex_count as u64, 0, &path)?;
+        let mut repaired = false;
+        let deltas = deltas
+            .into_iter()
+            .map(|d| {
+                let d = Vec3::from(d);
+                repaired |= !d.is_finite();
+                if d.is_finite() { d } else { Vec3::ZERO }
+            })
+            .collect();
+        if repaired {
+            self.ctx.warn(format!("{path}: non-finite deltas replaced by 0"));
+        }
+        Ok(deltas)
     }
 
     /// Fills in NORMAL, TANGENT, TEXCOORD_0 and TEXCOORD_1 where the primitive has them.
@@ -1725,10 +1850,24 @@ impl Builder<'_> {
         let root = self.data.root;
         for (a, animation) in root.animations.iter().enumerate() {
             let mut channels = Vec::with_capacity(animation.channels.len());
+            let mut weights = Vec::new();
             for (c, channel) in animation.channels.iter().enumerate() {
                 let path = format!("animations[{a}].channels[{c}]");
-                if let Some(channel) = self.channel(a, animation, channel, &path)? {
+                if channel.target.path == Checked::Valid(json::animation::Property::MorphTargetWeights) {
+                    weights.extend(self.weight_channel(a, animation, channel, &path)?);
+                } else if let Some(channel) = self.channel(a, animation, channel, &path)? {
                     channels.push(channel);
+                }
+            }
+            // Weights loop with the whole animation, as its node channels do.
+            let period = weights
+                .iter()
+                .map(|(_, w): &(Vec<usize>, WeightChannel)| w.times.last().copied().unwrap_or(0.0))
+                .fold(channels.iter().map(Channel::duration).fold(0.0, f32::max), f32::max);
+            for (morphs, mut channel) in weights {
+                channel.period = period;
+                for k in morphs {
+                    self.scene.morphs[k].channels.push(channel.clone());
                 }
             }
             if !channels.is_empty() {
@@ -1758,10 +1897,8 @@ impl Builder<'_> {
             Checked::Valid(P::Translation) => Property::Translation,
             Checked::Valid(P::Rotation) => Property::Rotation,
             Checked::Valid(P::Scale) => Property::Scale,
-            Checked::Valid(P::MorphTargetWeights) => {
-                self.ctx.warn_once("weights", "morph target weight animations are not supported; they are skipped");
-                return Ok(None);
-            }
+            // Played by `weight_channel`.
+            Checked::Valid(P::MorphTargetWeights) => return Ok(None),
             Checked::Invalid => {
                 self.ctx.warn(format!("{path}.target.path: invalid; the channel is skipped"));
                 return Ok(None);
@@ -1771,19 +1908,11 @@ impl Builder<'_> {
             log::debug!("{}: {path} animates a node outside the scene", self.ctx.file.display());
             return Ok(None);
         };
-        let interpolation = match sampler.interpolation {
-            Checked::Valid(json::animation::Interpolation::Step) => Interpolation::Step,
-            Checked::Valid(json::animation::Interpolation::Linear) => Interpolation::Linear,
-            Checked::Valid(json::animation::Interpolation::CubicSpline) => Interpolation::CubicSpline,
-            Checked::Invalid => {
-                self.ctx.warn(format!("animations[{a}].samplers[{s}].interpolation: invalid; the channel is skipped"));
-                return Ok(None);
-            }
+        let Some(interpolation) = self.interpolation(a, s, sampler) else {
+            return Ok(None);
         };
         let spath = format!("animations[{a}].samplers[{s}]");
-        let times = read_floats::<1>(&self.ctx, &self.data, sampler.input.value(), &format!("{spath}.input"))?;
-        let times: Vec<f32> = times.into_iter().map(|[t]| t).collect();
-        self.count_animation_keys(times.len(), &spath)?;
+        let times = self.key_times(sampler, &spath)?;
         let output = sampler.output.value();
         let opath = format!("{spath}.output");
         let values: Vec<Vec4> = match property {
@@ -1808,6 +1937,76 @@ impl Builder<'_> {
 }
 
 impl Builder<'_> {
+    /// A sampler's interpolation; `None` (with a warning) when invalid.
+    fn interpolation(&mut self, a: usize, s: usize, sampler: &json::animation::Sampler) -> Option<Interpolation> {
+        match sampler.interpolation {
+            Checked::Valid(json::animation::Interpolation::Step) => Some(Interpolation::Step),
+            Checked::Valid(json::animation::Interpolation::Linear) => Some(Interpolation::Linear),
+            Checked::Valid(json::animation::Interpolation::CubicSpline) => Some(Interpolation::CubicSpline),
+            Checked::Invalid => {
+                self.ctx.warn(format!("animations[{a}].samplers[{s}].interpolation: invalid; the channel is skipped"));
+                None
+            }
+        }
+    }
+
+    fn key_times(&mut self, sampler: &json::animation::Sampler, spath: &str) -> Result<Vec<f32>, SceneError> {
+        let times = read_floats::<1>(&self.ctx, &self.data, sampler.input.value(), &format!("{spath}.input"))?;
+        let times: Vec<f32> = times.into_iter().map(|[t]| t).collect();
+        self.count_animation_keys(times.len(), spath)?;
+        Ok(times)
+    }
+
+    /// A channel that animates morph target weights: the morphs it drives (those whose
+    /// driver is the target node) and their weights; `None` when there are none or the
+    /// channel cannot be played (with a warning).
+    fn weight_channel(
+        &mut self,
+        a: usize,
+        animation: &json::Animation,
+        channel: &json::animation::Channel,
+        path: &str,
+    ) -> Result<Option<(Vec<usize>, WeightChannel)>, SceneError> {
+        let root = self.data.root;
+        let s = channel.sampler.value();
+        let sampler = lookup(&self.ctx, &animation.samplers, s, ANIMATION_SAMPLERS, &format!("{path}.sampler"))?;
+        let target = channel.target.node.value();
+        lookup(&self.ctx, &root.nodes, target, NODES, &format!("{path}.target.node"))?;
+        let morphs: Vec<usize> =
+            (0..self.morph_driver.len()).filter(|&k| self.morph_driver[k] == Some(target)).collect();
+        let Some(&first) = morphs.first() else {
+            if self.scene_node.get(target).copied().flatten().is_some() {
+                self.ctx
+                    .warn(format!("{path}: node {target} draws no morph targets of its own; the channel is skipped"));
+            }
+            return Ok(None);
+        };
+        let Some(interpolation) = self.interpolation(a, s, sampler) else {
+            return Ok(None);
+        };
+        let spath = format!("animations[{a}].samplers[{s}]");
+        let times = self.key_times(sampler, &spath)?;
+        let values = read_floats::<1>(&self.ctx, &self.data, sampler.output.value(), &format!("{spath}.output"))?;
+        let values: Vec<f32> = values.into_iter().map(|[v]| v).collect();
+        self.count_animation_keys(values.len(), &spath)?;
+        let per_key =
+            self.scene.morphs[first].targets.len() * if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        let defect = key_times_defect(&times).or_else(|| {
+            if values.len() != times.len() * per_key {
+                Some(format!("{} output values for {} keys of {per_key} weights", values.len(), times.len()))
+            } else if !values.iter().all(|v| v.is_finite()) {
+                Some("output values are not finite".into())
+            } else {
+                None
+            }
+        });
+        if let Some(defect) = defect {
+            self.ctx.warn(format!("{spath}: {defect}; the channel is skipped"));
+            return Ok(None);
+        }
+        Ok(Some((morphs, WeightChannel { interpolation, times, values, period: 0.0 })))
+    }
+
     /// Adds keyframe times or values to the scene total and checks the limit.
     fn count_animation_keys(&mut self, added: usize, path: &str) -> Result<(), SceneError> {
         self.total_animation_keys += added as u64;
@@ -1817,15 +2016,23 @@ impl Builder<'_> {
     }
 }
 
+/// Why key times cannot be played, if they cannot.
+fn key_times_defect(times: &[f32]) -> Option<String> {
+    if times.is_empty() {
+        return Some("no keyframes".into());
+    }
+    if !times.iter().all(|t| t.is_finite()) || times.windows(2).any(|w| w[0] > w[1]) {
+        return Some("key times are not finite and ascending".into());
+    }
+    None
+}
+
 /// Why a channel cannot be played, if it cannot.
 fn channel_defect(channel: &Channel) -> Option<String> {
     let keys = channel.times.len();
     let per_key = if channel.interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-    if keys == 0 {
-        return Some("no keyframes".into());
-    }
-    if !channel.times.iter().all(|t| t.is_finite()) || channel.times.windows(2).any(|w| w[0] > w[1]) {
-        return Some("key times are not finite and ascending".into());
+    if let Some(defect) = key_times_defect(&channel.times) {
+        return Some(defect);
     }
     if channel.values.len() != keys * per_key {
         return Some(format!("{} output values for {keys} keys (expected {})", channel.values.len(), keys * per_key));
@@ -2340,6 +2547,58 @@ mod tests {
     }
 
     #[test]
+    fn loads_morph_targets_weights_and_weight_animations() {
+        let mut g = Gltf::triangle();
+        let lift = g.float_accessor(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3", 3);
+        let shift = g.float_accessor(&[1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0], "VEC3", 3);
+        let normals = g.float_accessor(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3", 3);
+        let normal_deltas = g.float_accessor(&[1.0, 0.0, -1.0, 1.0, 0.0, -1.0, 1.0, 0.0, -1.0], "VEC3", 3);
+        g.primitive()["attributes"]["NORMAL"] = json!(normals);
+        g.primitive()["targets"] = json!([{"POSITION": lift, "NORMAL": normal_deltas}, {"POSITION": shift}]);
+        g.json["meshes"][0]["weights"] = json!([0.25, 0.0]);
+        // A second node draws the mesh again with weights of its own: it takes the first's.
+        g.json["nodes"][0]["weights"] = json!([0.5, 0.5]);
+        g.push("nodes", json!({"mesh": 0, "weights": [1.0, 1.0]}));
+        g.json["scenes"][0]["nodes"] = json!([0, 1]);
+        let times = g.float_accessor(&[0.0, 1.0, 4.0], "SCALAR", 3);
+        let weights = g.float_accessor(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0], "SCALAR", 6);
+        let steps = g.float_accessor(&[0.0, 1.0, 0.0], "SCALAR", 3);
+        g.json["animations"] = json!([{"samplers": [
+            {"input": times, "output": weights},
+            {"input": times, "output": steps, "interpolation": "STEP"},
+        ], "channels": [
+            {"sampler": 0, "target": {"node": 0, "path": "weights"}},
+            {"sampler": 1, "target": {"node": 0, "path": "weights"}},
+            {"sampler": 0, "target": {"node": 1, "path": "weights"}},
+        ]}]);
+        let dir = TempDir::new("morph");
+        let scene = load(&g.write_gltf(&dir, "morph")).unwrap();
+        assert_consistent(&scene);
+        assert!(scene.is_animated());
+        assert_eq!(scene.morphs.len(), 1);
+        let morph = &scene.morphs[0];
+        assert_eq!((morph.mesh, morph.targets.len(), morph.weights.as_slice()), (0, 2, &[0.5, 0.5][..]));
+        assert_eq!(morph.targets[0].positions, vec![Vec3::Z; 3]);
+        assert_eq!((morph.targets[0].normals.len(), morph.targets[1].normals.len()), (3, 0));
+        // Six values for three keys of two weights: the first channel; the second has three
+        // values for two targets and is skipped.
+        assert_eq!(morph.channels.len(), 1);
+        assert_eq!(morph.channels[0].period, 4.0);
+        assert_eq!(morph.weights_at(0.5), vec![0.5, 0.0]);
+        assert_eq!(morph.weights_at(2.5), vec![1.0, 0.5]);
+        assert_eq!(morph.weights_at(4.5), vec![0.5, 0.0], "loops over the animation");
+        let v = morph.deform(&scene.meshes[0].vertices, &morph.weights_at(2.5));
+        assert_eq!(v[0].position, [0.5, 0.0, 1.0]);
+        let n = Vec3::from(v[0].normal);
+        assert!((n - Vec3::X).length() < 1e-6, "normal {n}");
+        // Bounds cover the targets at full weight.
+        assert_eq!((scene.meshes[0].bounds_min, scene.meshes[0].bounds_max), (Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0)));
+        assert_warning(&scene, "animations[0].samplers[1]: 3 output values for 3 keys of 2 weights");
+        assert_warning(&scene, "a morphing mesh drawn by several nodes");
+        assert_warning(&scene, "node 1 draws no morph targets of its own");
+    }
+
+    #[test]
     fn hierarchy_is_flattened_parents_first_with_shared_meshes() {
         let mut g = Gltf::triangle();
         // 90 degrees about Z, scale 2, translation (1, 2, 3), column-major.
@@ -2410,7 +2669,7 @@ mod tests {
         let animation = &scene.animations[0];
         assert_eq!((animation.name.as_str(), animation.channels.len(), animation.duration()), ("spin", 3, 2.0));
         assert_eq!(animation.channels[1].interpolation, Interpolation::CubicSpline);
-        assert_warning(&scene, "morph target weight animations are not supported");
+        assert_warning(&scene, "node 0 draws no morph targets of its own; the channel is skipped");
         assert_warning(&scene, "animations[0].samplers[3]: 2 output values for 3 keys (expected 3)");
         let (scale, _, translation) = scene.evaluate(0.5).world[0].to_scale_rotation_translation();
         assert!(scale.abs_diff_eq(Vec3::ONE, 1e-5), "step holds the first key: {scale}");

@@ -11,6 +11,7 @@ pub mod builtin;
 pub mod builtin_stability;
 pub mod gltf_loader;
 pub mod limits;
+pub mod morph;
 pub mod tangents;
 
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -18,6 +19,7 @@ use std::path::PathBuf;
 
 pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_bytes};
 pub use limits::Limits;
+pub use morph::{Morph, MorphTarget, WeightChannel};
 
 /// A scene-loading failure. The message always names the file and the problem.
 #[derive(Debug, thiserror::Error)]
@@ -293,6 +295,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub cameras: Vec<Camera>,
     pub animations: Vec<Animation>,
+    /// Morph targets of the deforming meshes, at most one per mesh.
+    pub morphs: Vec<Morph>,
     /// Recoverable defects found while loading, each naming the defect.
     pub warnings: Vec<String>,
 }
@@ -332,7 +336,12 @@ impl Scene {
 
     /// True when any animation moves any node.
     pub fn is_animated(&self) -> bool {
-        self.animations.iter().any(|a| !a.channels.is_empty())
+        self.animations.iter().any(|a| !a.channels.is_empty()) || self.morphs.iter().any(Morph::is_animated)
+    }
+
+    /// The morph targets of `mesh`, if it deforms.
+    pub fn morph_of(&self, mesh: u32) -> Option<&Morph> {
+        self.morphs.iter().find(|m| m.mesh == mesh)
     }
 
     /// World-space bounds of all instances at a pose.

@@ -3,6 +3,8 @@
 //! - **Bottom level**, one tree per mesh in mesh-local space, built once ([`MeshBvh::build`])
 //!   and pooled with every other mesh's into one run of rows ([`BlasPool`]); each mesh's
 //!   references are relative to its own first row, so pooling rewrites nothing.
+//!   A deforming mesh's tree is refit in place or rebuilt within rows reserved for it
+//!   (`refit.rs`).
 //! - **Top level** over the instances' world-space boxes ([`Tlas::build`]), rebuilt whenever
 //!   instances move: its cost and upload grow with the instance count, not triangles.
 //!
@@ -41,6 +43,7 @@ mod build;
 mod layout;
 mod morton;
 pub mod rays;
+mod refit;
 mod scene_bvh;
 pub mod traverse;
 
@@ -50,6 +53,7 @@ pub use layout::{
     KIND_SHIFT, MAX_LEAF_SIZE, MeshBvh, MeshRange, NODE_ROWS, NodeRecord, Row, STACK_SIZE, TRIANGLE_ROWS, Tlas,
 };
 pub use morton::morton_order;
+pub use refit::{Refit, reserved_rows};
 pub use scene_bvh::instance_descs;
 pub use traverse::{Hit, accept_all, any_hit, closest_hit};
 

@@ -1,18 +1,24 @@
 //! Building both levels straight from a loaded [`Scene`] at a [`Pose`].
 
-use super::{BlasPool, BuildOptions, InstanceDesc, MeshBvh, SceneBvh};
+use super::{BlasPool, BuildOptions, InstanceDesc, MeshBvh, SceneBvh, reserved_rows};
 use crate::scene::{Pose, Scene};
 use glam::{Affine3A, Vec3};
 
 impl SceneBvh {
     /// Builds every mesh's bottom level (meshes in parallel) and the top level for `pose`.
+    /// Deforming meshes' trees are built over their base vertices, in [`reserved_rows`] rows.
     /// Instance custom indices are positions in `scene.instances`; every instance gets mask
     /// 0xFF and is alpha-tested when its mesh's material is not opaque.
     pub fn build(scene: &Scene, pose: &Pose) -> Self {
         let blas = BlasPool::build(scene.meshes.len(), |i| {
             let mesh = &scene.meshes[i];
             let positions: Vec<Vec3> = mesh.vertices.iter().map(|v| v.position.into()).collect();
-            MeshBvh::build(&positions, &mesh.indices, &BuildOptions::MESH)
+            let mut tree = MeshBvh::build(&positions, &mesh.indices, &BuildOptions::MESH);
+            if scene.morph_of(i as u32).is_some() {
+                // Room for whatever shape a rebuild for deformed vertices gives.
+                tree.rows.resize(reserved_rows(tree.triangle_count), [0; 4]);
+            }
+            tree
         });
         Self::new(blas, &instance_descs(scene, pose))
     }

@@ -1,0 +1,241 @@
+//! Deforming meshes (morph targets, builtin:morph-test) through both ray backends, frame after
+//! frame, across the periodic rebuild of their bottom levels:
+//! - primary rays agree with the G-buffer on the deformed sheet (raster and rays read the same
+//!   deformed vertices);
+//! - compute BVH (refit on the CPU) and ray query (BLAS updates) agree hit for hit after
+//!   refits, on the frame of the rebuild and after it;
+//! - the compute backend's refit tree finds exactly the hits of a tree built from scratch over
+//!   the deformed vertices;
+//! - the refit/rebuild schedule runs as [`REBUILD_EVERY`] says, and validation stays clean.
+//!
+//! The agreement rules (and the edge ties they allow) are those of tests/backends.rs.
+
+mod common;
+
+use glam::Vec3;
+use hybrid_rt::accel::REBUILD_EVERY;
+use hybrid_rt::accel::bvh::rays::{Ray, SplitMix64};
+use hybrid_rt::accel::bvh::{SceneBvh, accept_all, closest_hit};
+use hybrid_rt::backend::Backend;
+use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes::{gbuffer::NO_ID, primary_rays};
+use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::scene::builtin::{self, morph_test_facts as facts};
+use hybrid_rt::scene::{Pose, Scene};
+use std::sync::Arc;
+
+const W: u32 = 80;
+const H: u32 = 60;
+/// Enough frames for one rebuild and refits on either side of it.
+const FRAMES: u32 = REBUILD_EVERY + 4;
+/// Frame 0 is the first deformation (the one at upload), so deformation k happens on frame
+/// k - 1: frame 2 has seen refits only, frame REBUILD_EVERY - 1 rebuilt, the last refit the
+/// rebuilt tree.
+const CHECKED: [u32; 3] = [2, REBUILD_EVERY - 1, FRAMES - 1];
+/// Animation seconds per frame: the weights change every frame.
+const FRAME_DT: f32 = 0.09;
+
+/// Renders FRAMES frames; returns the renderer and the checked frames' images.
+fn render(ctx: &Arc<Context>, backend: Backend) -> (Renderer, Vec<Vec<CpuImage>>) {
+    let settings = Settings {
+        width: W,
+        height: H,
+        primary_rays: true,
+        frame_dt: FRAME_DT,
+        start_time: 0.05,
+        // Not under test here, and the slowest pass of a frame on lavapipe.
+        denoiser: false,
+        ..Default::default()
+    };
+    let scene = builtin::morph_test();
+    let mut r =
+        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
+    let mut images = Vec::new();
+    for frame in 0..FRAMES {
+        r.render_frame().unwrap();
+        if CHECKED.contains(&frame) {
+            let names = [primary_rays::HIT, primary_rays::DEPTH, "gbuffer.ids", "gbuffer.depth", primary_rays::BARY];
+            images.push(r.read_outputs(&names).unwrap());
+        }
+    }
+    (r, images)
+}
+
+/// True when all 8 neighbours see the same instance in the G-buffer (not a silhouette).
+fn interior(ids: &CpuImage, x: u32, y: u32) -> bool {
+    if x == 0 || y == 0 || x + 1 >= ids.width || y + 1 >= ids.height {
+        return false;
+    }
+    let id = ids.get_u32(x, y, 0);
+    (-1i32..=1).all(|dy| (-1i32..=1).all(|dx| ids.get_u32((x as i32 + dx) as u32, (y as i32 + dy) as u32, 0) == id))
+}
+
+/// Primary rays see the G-buffer's instance and depth away from silhouettes, on the sheet
+/// in particular.
+fn check_against_gbuffer(name: &str, img: &[CpuImage]) {
+    let (hit, depth, ids, gdepth) = (&img[0], &img[1], &img[2], &img[3]);
+    let mut on_sheet = 0;
+    for y in 0..H {
+        for x in 0..W {
+            if !interior(ids, x, y) {
+                continue;
+            }
+            let gid = ids.get_u32(x, y, 0);
+            assert_eq!(hit.get_u32(x, y, 0), gid, "{name}: instance at ({x},{y})");
+            if gid == NO_ID {
+                continue;
+            }
+            let (d, gd) = (depth.get(x, y, 0), gdepth.get(x, y, 0));
+            assert!((d - gd).abs() <= 1e-3 * gd, "{name}: depth at ({x},{y}): ray {d}, G-buffer {gd}");
+            on_sheet += usize::from(gid == facts::SHEET_INSTANCE);
+        }
+    }
+    assert!(on_sheet > 300, "{name}: only {on_sheet} interior pixels on the sheet");
+}
+
+/// The two backends' primary hits: the same instance and triangle at t within 1e-4
+/// relative, except rays through a shared edge (barycentric distance < 1e-4), which may
+/// report either triangle; returns those ties.
+fn check_backends_agree(name: &str, a: &[CpuImage], b: &[CpuImage]) -> usize {
+    let on_edge = |img: &[CpuImage], x, y| {
+        let (u, v) = (img[4].get(x, y, 0), img[4].get(x, y, 1));
+        u.min(v).min(1.0 - u - v) < 1e-4
+    };
+    let mut ties = 0;
+    for y in 0..H {
+        for x in 0..W {
+            let (ia, ib) = (a[0].get_u32(x, y, 0), b[0].get_u32(x, y, 0));
+            if ia == NO_ID && ib == NO_ID {
+                continue;
+            }
+            if ia == NO_ID || ib == NO_ID {
+                let hit = if ia == NO_ID { b } else { a };
+                assert!(on_edge(hit, x, y), "{name}: only one backend hits at ({x},{y}), away from any edge");
+                ties += 1;
+                continue;
+            }
+            let (ta, tb) = (f32::from_bits(a[0].get_u32(x, y, 2)), f32::from_bits(b[0].get_u32(x, y, 2)));
+            assert!((ta - tb).abs() <= 1e-4 * ta.abs().max(tb.abs()), "{name}: t differs at ({x},{y}): {ta} vs {tb}");
+            if ia != ib || a[0].get_u32(x, y, 1) != b[0].get_u32(x, y, 1) {
+                assert!(
+                    on_edge(a, x, y) && on_edge(b, x, y),
+                    "{name}: different triangles at ({x},{y}) away from an edge (instances {ia}/{ib})"
+                );
+                ties += 1;
+            }
+        }
+    }
+    ties
+}
+
+/// The renderer's scene with the sheet deformed as at `pose`: what a BVH built from scratch
+/// for that frame would see.
+fn deformed(scene: &Scene, pose: &Pose) -> Scene {
+    let mut s = scene.clone();
+    for morph in &scene.morphs {
+        let mesh = &mut s.meshes[morph.mesh as usize];
+        mesh.vertices = morph.deform(&mesh.vertices, &morph.weights_at(pose.time));
+    }
+    s
+}
+
+/// Rays from near the camera at random points of the sheet's (deformed) extent.
+fn sheet_rays(n: usize) -> Vec<Ray> {
+    let mut rng = SplitMix64::new(11);
+    (0..n)
+        .map(|_| {
+            let target = Vec3::new(
+                (rng.unit() * 2.0 - 1.0) * facts::HALF * 1.1,
+                (rng.unit() * 2.0 - 1.0) * facts::HALF * 1.1,
+                facts::SHEET_Z,
+            );
+            let origin = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, 0.0);
+            Ray { origin: origin.to_array(), tmin: 0.0, dir: (target - origin).to_array(), tmax: 1e30 }
+        })
+        .collect()
+}
+
+#[test]
+fn deforming_mesh_agrees_across_backends_refits_and_rebuilds() {
+    let ctx = common::validated_context();
+    let shaders = ShaderLibrary::embedded();
+    let (mut rc, compute) = render(&ctx, Backend::Compute);
+    let stats = rc.scene_gpu.accel.stats();
+    assert_eq!((stats.blas_refits, stats.blas_rebuilds), (u64::from(FRAMES) - 1, 1), "compute refit schedule");
+    eprintln!("compute: BVH refit {:.3} ms, rebuild {:.3} ms (CPU)", stats.blas_refit_ms, stats.blas_rebuild_ms);
+    for (frame, img) in CHECKED.iter().zip(&compute) {
+        check_against_gbuffer(&format!("compute, frame {frame}"), img);
+    }
+    // The GPU traversal of the refit tree against a CPU tree built from scratch.
+    let pose = rc.pose_of(FRAMES - 1);
+    let fresh = SceneBvh::build(&deformed(&rc.scene, &pose), &pose);
+    let rays = sheet_rays(4096);
+    let (hits, _) = rc.trace_rays(&shaders, &rays, false, 0).unwrap();
+    let mut on_sheet = 0;
+    for (ray, hit) in rays.iter().zip(&hits) {
+        let cpu = closest_hit(&fresh, ray.origin.into(), ray.dir.into(), ray.tmin, ray.tmax, 0xff, accept_all);
+        let gpu = hit.is_hit().then_some((hit.instance, hit.primitive));
+        assert_eq!(gpu, cpu.map(|h| (h.instance, h.primitive)), "refit tree vs fresh tree: {ray:?}");
+        if let Some(h) = cpu {
+            assert!((h.t - hit.t).abs() <= 1e-5 * h.t, "t {} vs {}", hit.t, h.t);
+            on_sheet += usize::from(h.instance == facts::SHEET_INSTANCE);
+        }
+    }
+    assert!(on_sheet > 2000, "only {on_sheet} of {} rays hit the sheet", rays.len());
+    let compute_hits = hits;
+    drop(rc);
+    if ctx.caps.supports_ray_query() {
+        let (mut rq, query) = render(&ctx, Backend::RayQuery);
+        let stats = rq.scene_gpu.accel.stats();
+        assert_eq!((stats.blas_refits, stats.blas_rebuilds), (u64::from(FRAMES) - 1, 1), "BLAS update schedule");
+        eprintln!(
+            "ray query: BLAS update {:.3} ms, rebuild {:.3} ms (GPU)",
+            stats.blas_refit_ms, stats.blas_rebuild_ms
+        );
+        for ((frame, c), q) in CHECKED.iter().zip(&compute).zip(&query) {
+            check_against_gbuffer(&format!("ray query, frame {frame}"), q);
+            let ties = check_backends_agree(&format!("frame {frame}"), c, q);
+            assert!(ties < (W * H / 50) as usize, "frame {frame}: {ties} edge ties");
+        }
+        let (hits, _) = rq.trace_rays(&shaders, &rays, false, 0).unwrap();
+        let mut ties = 0;
+        for ((ray, a), b) in rays.iter().zip(&compute_hits).zip(&hits) {
+            assert_eq!(a.is_hit(), b.is_hit(), "{ray:?}");
+            if a.is_hit() {
+                assert!((a.t - b.t).abs() <= 1e-4 * a.t, "{ray:?}: t {} vs {}", a.t, b.t);
+                if (a.instance, a.primitive) != (b.instance, b.primitive) {
+                    let edge = |h: &hybrid_rt::render::ray_batch::HitRecord| h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-4;
+                    assert!(edge(a) && edge(b), "{ray:?}: different triangles away from an edge");
+                    ties += 1;
+                }
+            }
+        }
+        assert!(ties < 20, "{ties} edge ties of {} rays", rays.len());
+    } else {
+        assert_ne!(std::env::var("CI").as_deref(), Ok("true"), "CI machines have Mesa >= 24.1 with ray query");
+        eprintln!("ray query unavailable on this device: checked the compute backend only");
+    }
+    common::assert_validation_clean(ctx);
+}
+
+/// The project's glTF with morph targets (tools/make_morph_scene.py) loads as a deforming
+/// mesh whose animated weights move its vertices and normals.
+#[test]
+fn gltf_morph_asset_loads_as_a_deforming_mesh() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/morph/morph_wave.gltf");
+    let scene = hybrid_rt::scene::load_gltf(&path, &Default::default()).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(scene.is_animated());
+    assert_eq!(scene.morphs.len(), 1);
+    let morph = &scene.morphs[0];
+    assert_eq!((morph.targets.len(), morph.channels.len()), (2, 1));
+    assert!(morph.targets.iter().all(|t| t.normals.len() == t.positions.len()));
+    // Weights (0, 0) at t = 0 and (1, 0) at t = 0.5: the bump alone.
+    let base = &scene.meshes[morph.mesh as usize].vertices;
+    assert_eq!(morph.deform(base, &morph.weights_at(0.0)), *base);
+    let bumped = morph.deform(base, &morph.weights_at(0.5));
+    let centre = bumped.iter().map(|v| v.position[2]).fold(0.0, f32::max);
+    assert!((centre - 0.5).abs() < 1e-3, "bump height {centre}");
+    assert!(bumped.iter().any(|v| v.normal != [0.0, 0.0, 1.0]));
+}
