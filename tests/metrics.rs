@@ -1,4 +1,10 @@
-//! Metrics checks that need outside files or take long; both are ignored by default.
+//! HDR-FLIP and LDR-FLIP against NVIDIA's implementation.
+//!
+//! `flip_matches_nvidia_on_synthetic_pairs` always runs: two synthetic image pairs (built by the
+//! formulas of tools/flip_reference_values.py) against the means NVIDIA's own FLIP
+//! (`flip-evaluator` 1.7 from PyPI) prints for them; that script says how to reproduce them.
+//!
+//! The other two checks need outside files or take long, and are ignored by default:
 //!
 //! `FLIP_IMAGES=/path/to/flip/images cargo test --test metrics -- --ignored nvidia_published`
 //! checks FLIP against NVIDIA's published means for the image pair in the FLIP repository
@@ -26,6 +32,48 @@ fn load_png(path: &Path) -> CpuImage {
     let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
     let (w, h) = img.dimensions();
     rgb(w, h, |x, y, c| img.get_pixel(x, y)[c] as f32 / 255.0)
+}
+
+/// The pairs of tools/flip_reference_values.py, same formulas, computed in f64 and stored as f32.
+fn synthetic_pairs() -> ((CpuImage, CpuImage), (CpuImage, CpuImage)) {
+    let (w, h) = (160, 120);
+    let ldr_ref = |x: u32, y: u32, c: usize| {
+        let (x, y, c) = (x as f64, y as f64, c as f64);
+        0.5 + 0.4 * (0.21 * x + 1.3 * c).sin() * (0.17 * y).cos()
+    };
+    let ldr_test = |x: u32, y: u32, c: usize| {
+        let mut e = 0.08 * (0.9 * x as f64 + 0.7 * y as f64 + c as f64).sin();
+        if (60..72).contains(&x) && (40..52).contains(&y) {
+            e += 0.35;
+        }
+        (ldr_ref(x, y, c) + e).clamp(0.0, 1.0)
+    };
+    let hdr_ref = |x: u32, y: u32, c: usize| {
+        let (x, y, c) = (x as f64, y as f64, c as f64);
+        (5.0 * (0.05 * x + 0.4 * c).sin() * (0.043 * y).cos()).exp2()
+    };
+    let hdr_test = |x: u32, y: u32, c: usize| {
+        let mut f = 1.0 + 0.2 * (0.8 * x as f64 + 1.1 * y as f64 + c as f64).sin();
+        if (100..110).contains(&x) && (20..30).contains(&y) {
+            f *= 8.0;
+        }
+        hdr_ref(x, y, c) * f
+    };
+    let img = |f: &dyn Fn(u32, u32, usize) -> f64| rgb(w, h, |x, y, c| f(x, y, c) as f32);
+    ((img(&ldr_ref), img(&ldr_test)), (img(&hdr_ref), img(&hdr_test)))
+}
+
+#[test]
+fn flip_matches_nvidia_on_synthetic_pairs() {
+    let ((lr, lt), (hr, ht)) = synthetic_pairs();
+    let ldr = metrics::ldr_flip(&lr, &lt, LdrInput::Srgb, DEFAULT_PPD, false).unwrap().mean;
+    // NVIDIA flip-evaluator 1.7: 0.156950 (printed to six places).
+    assert!((ldr - 0.156_950).abs() < 2e-5, "LDR-FLIP {ldr}, NVIDIA's 0.156950");
+    let hdr = metrics::hdr_flip(&hr, &ht, &HdrFlipOptions::default()).unwrap();
+    let e = hdr.exposures.unwrap();
+    // NVIDIA: exposures -3.8205 to 1.1344 in 5 steps, mean 0.098864.
+    assert!((e.start + 3.8205).abs() < 1e-3 && (e.stop - 1.1344).abs() < 1e-3 && e.count == 5, "{e:?}");
+    assert!((hdr.mean - 0.098_864).abs() < 2e-5, "HDR-FLIP {}, NVIDIA's 0.098864", hdr.mean);
 }
 
 #[test]

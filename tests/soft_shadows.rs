@@ -3,13 +3,14 @@
 //! - the filtered visibility converges to it, closer than a single frame's raw estimate;
 //! - sample counts go up in the penumbra and down to 1 where nothing changes; a camera cut
 //!   puts every sampled pixel at s_max; a tight budget lowers the counts;
-//! - a hard light (builtin:shadow-test) stays at one ray and is not filtered.
+//! - a hard light (builtin:shadow-test) stays at one ray and is not filtered: the frame plan
+//!   leaves the filter passes out, and with `--full` they pass its visibility through.
 
 mod common;
 
 use glam::{Vec2, Vec3};
 use hybrid_rt::gpu::ShaderLibrary;
-use hybrid_rt::passes::shadows::{ShadowSettings, VISIBILITY};
+use hybrid_rt::passes::shadows::{HARD_VISIBILITY, ShadowSettings, VISIBILITY};
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, shadow_test_facts as facts};
 
@@ -21,7 +22,15 @@ fn renderer(
     scene: hybrid_rt::scene::Scene,
     shadows: ShadowSettings,
 ) -> Renderer {
-    let settings = Settings { width: W, height: H, shadows, ..Default::default() };
+    renderer_with(ctx, scene, Settings { shadows, ..Default::default() })
+}
+
+fn renderer_with(
+    ctx: &std::sync::Arc<hybrid_rt::gpu::Context>,
+    scene: hybrid_rt::scene::Scene,
+    settings: Settings,
+) -> Renderer {
+    let settings = Settings { width: W, height: H, ..settings };
     Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, common::auto_backend(ctx))
         .unwrap()
 }
@@ -150,7 +159,21 @@ fn a_tight_budget_lowers_the_counts() {
 #[test]
 fn hard_lights_use_one_ray_and_no_filter() {
     let ctx = common::validated_context();
+    // The plan: the trace pass alone, its ring read directly.
     let mut r = renderer(&ctx, builtin::shadow_test(), ShadowSettings::default());
+    r.render_frame().unwrap();
+    assert_eq!(r.shadow_visibility(), HARD_VISIBILITY);
+    assert!(!r.graph.pass_names().iter().any(|p| p.starts_with("shadows_")), "{:?}", r.graph.pass_names());
+    let counts = r.read_output("shadows.sample_count").unwrap();
+    for y in 0..H {
+        for x in 0..W {
+            let c = counts.get(x, y, 0);
+            assert!(c == 1.0 || c == 0.0, "hard light: count {c} at ({x},{y})");
+        }
+    }
+    drop(r);
+    // Every pass (`--full`): the filter runs and leaves hard lights alone.
+    let mut r = renderer_with(&ctx, builtin::shadow_test(), Settings { full: true, ..Default::default() });
     for _ in 0..3 {
         r.render_frame().unwrap();
     }

@@ -1,5 +1,11 @@
-//! `hybrid-rt bench frame`: where a frame's GPU time goes, per pass, at chosen sizes, with the
+//! `hybrid-rt bench frame`: where a frame's time goes, per pass, at chosen sizes, with the
 //! denoiser's share (every svgf_* stage) called out.
+//!
+//! Each pass is timed twice: by timestamp queries around it in the normal one-submission frame,
+//! and by wall clock around its own submission in a profiled frame (`Renderer::profile_passes`).
+//! Shares come from the wall clock: lavapipe's timestamps leave compute dispatches out, while
+//! on a CPU device a pass's submission-to-fence time is its cost (plus a submission's overhead,
+//! a few microseconds). On a GPU the two columns should agree.
 
 use super::median;
 use crate::backend::Backend;
@@ -14,10 +20,12 @@ use std::sync::Arc;
 #[derive(Clone, Debug, Serialize)]
 pub struct PassCost {
     pub pass: String,
-    /// Median GPU time over the measured frames.
+    /// Median wall-clock time of the pass's own submission over the profiled frames.
     pub ms: f64,
-    /// Of the frame's total.
+    /// Of the profiled passes' total.
     pub share: f64,
+    /// Median timestamp-query time over the unprofiled frames.
+    pub gpu_ms: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -25,17 +33,22 @@ pub struct FrameCost {
     pub width: u32,
     pub height: u32,
     pub frames: u32,
+    /// Sum of the passes' profiled wall-clock times.
     pub total_ms: f64,
+    /// Sum of the passes' timestamp times.
+    pub timestamps_ms: f64,
     pub passes: Vec<PassCost>,
     /// All svgf_* passes together.
     pub svgf_ms: f64,
     pub svgf_share: f64,
-    /// Median wall-clock frame time, recording to fence (see `Renderer::last_frame_wall_ms`).
+    /// Median wall-clock time of an unprofiled frame, recording to fence (see
+    /// `Renderer::last_frame_wall_ms`).
     pub wall_ms: f64,
 }
 
 /// Renders `warmup + frames` frames of `scene` (the default frame: TAA and denoiser on; the
-/// frame plan unless `full`) and takes the median GPU time of every pass over the last `frames`.
+/// frame plan unless `full`), then `frames` more of each kind, unprofiled and profiled, and
+/// takes the medians.
 pub fn measure(
     ctx: &Arc<Context>,
     shaders: &ShaderLibrary,
@@ -50,64 +63,77 @@ pub fn measure(
     for _ in 0..warmup {
         r.render_frame()?;
     }
-    let mut samples: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut stamps: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut walls: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut order = Vec::new();
-    let mut wall = Vec::new();
-    for _ in 0..frames.max(1) {
-        r.render_frame()?;
-        wall.push(r.last_frame_wall_ms);
-        for t in &r.last_pass_times {
-            if !samples.contains_key(&t.pass) {
-                order.push(t.pass.clone());
+    let mut frame_wall = Vec::new();
+    for profiled in [false, true] {
+        r.profile_passes = profiled;
+        for _ in 0..frames.max(1) {
+            r.render_frame()?;
+            if !profiled {
+                frame_wall.push(r.last_frame_wall_ms);
             }
-            samples.entry(t.pass.clone()).or_default().push(t.gpu_ms);
+            for t in &r.last_pass_times {
+                if !order.contains(&t.pass) {
+                    order.push(t.pass.clone());
+                }
+                match t.wall_ms {
+                    Some(ms) => walls.entry(t.pass.clone()).or_default().push(ms),
+                    None => stamps.entry(t.pass.clone()).or_default().push(t.gpu_ms),
+                }
+            }
         }
     }
-    let medians: Vec<(String, f64)> = order.iter().map(|p| (p.clone(), median(&samples[p]))).collect();
-    let total_ms: f64 = medians.iter().map(|(_, ms)| ms).sum();
+    let of = |m: &BTreeMap<String, Vec<f64>>, p: &str| m.get(p).map(|v| median(v)).unwrap_or(0.0);
+    let passes: Vec<(String, f64, f64)> = order.iter().map(|p| (p.clone(), of(&walls, p), of(&stamps, p))).collect();
+    let total_ms: f64 = passes.iter().map(|(_, ms, _)| ms).sum();
     let share = |ms: f64| if total_ms > 0.0 { ms / total_ms } else { 0.0 };
-    let svgf_ms: f64 = medians.iter().filter(|(p, _)| p.starts_with("svgf_")).map(|(_, ms)| ms).sum();
+    let svgf_ms: f64 = passes.iter().filter(|(p, _, _)| p.starts_with("svgf_")).map(|(_, ms, _)| ms).sum();
     Ok(FrameCost {
         width,
         height,
         frames: frames.max(1),
         total_ms,
-        passes: medians.into_iter().map(|(pass, ms)| PassCost { pass, ms, share: share(ms) }).collect(),
+        timestamps_ms: passes.iter().map(|(_, _, gpu)| gpu).sum(),
+        passes: passes.into_iter().map(|(pass, ms, gpu_ms)| PassCost { pass, ms, share: share(ms), gpu_ms }).collect(),
         svgf_ms,
         svgf_share: share(svgf_ms),
-        wall_ms: median(&wall),
+        wall_ms: median(&frame_wall),
     })
 }
 
-/// The terminal table: one column per size.
+/// The terminal table: per size, each pass's wall-clock ms (share) and timestamp ms.
 pub fn table(costs: &[FrameCost]) -> String {
     let mut s = format!("{:<28}", "pass");
     for c in costs {
-        s.push_str(&format!(" {:>22}", format!("{}x{} ms (share)", c.width, c.height)));
+        s.push_str(&format!(" {:>22} {:>10}", format!("{}x{} ms (share)", c.width, c.height), "timestamp"));
     }
     s.push('\n');
     let passes: Vec<&str> = costs.first().map(|c| c.passes.iter().map(|p| p.pass.as_str()).collect()).unwrap_or_default();
     for p in passes {
         s.push_str(&format!("{p:<28}"));
         for c in costs {
-            let cell = c.passes.iter().find(|x| x.pass == p).map(|x| format!("{:.2} ({:.1}%)", x.ms, 100.0 * x.share));
-            s.push_str(&format!(" {:>22}", cell.unwrap_or_default()));
+            let cost = c.passes.iter().find(|x| x.pass == p);
+            let cell = cost.map(|x| format!("{:.2} ({:.1}%)", x.ms, 100.0 * x.share)).unwrap_or_default();
+            let stamp = cost.map(|x| format!("{:.2}", x.gpu_ms)).unwrap_or_default();
+            s.push_str(&format!(" {cell:>22} {stamp:>10}"));
         }
         s.push('\n');
     }
     s.push_str(&format!("{:<28}", "svgf_* (denoiser) total"));
     for c in costs {
-        s.push_str(&format!(" {:>22}", format!("{:.2} ({:.1}%)", c.svgf_ms, 100.0 * c.svgf_share)));
+        s.push_str(&format!(" {:>22} {:>10}", format!("{:.2} ({:.1}%)", c.svgf_ms, 100.0 * c.svgf_share), ""));
     }
     s.push('\n');
-    s.push_str(&format!("{:<28}", "timestamps total"));
+    s.push_str(&format!("{:<28}", "passes total"));
     for c in costs {
-        s.push_str(&format!(" {:>22}", format!("{:.2}", c.total_ms)));
+        s.push_str(&format!(" {:>22} {:>10}", format!("{:.2}", c.total_ms), format!("{:.2}", c.timestamps_ms)));
     }
     s.push('\n');
-    s.push_str(&format!("{:<28}", "frame wall clock"));
+    s.push_str(&format!("{:<28}", "frame (one submission)"));
     for c in costs {
-        s.push_str(&format!(" {:>22}", format!("{:.2}", c.wall_ms)));
+        s.push_str(&format!(" {:>22} {:>10}", format!("{:.2}", c.wall_ms), ""));
     }
     s.push('\n');
     s

@@ -23,13 +23,13 @@ enum BenchCommand {
     /// Build time, memory and rays/s of both ray backends on the same primary, shadow and
     /// incoherent rays (the definition is in src/bench/rays.rs).
     Rays(RaysArgs),
-    /// Per-pass GPU time of the default frame at one or more sizes, with the denoiser's
-    /// (svgf_*) share.
+    /// Per-pass time of the default frame at one or more sizes (each pass's own submission,
+    /// wall clock, beside its timestamps), with the denoiser's (svgf_*) share.
     Frame(super::bench_frame::FrameArgs),
     /// Many frames of an animated scene (default: 10,000 of the Cornell box at 32x32): host
     /// and device memory sampled every N frames after a warm-up, and frame times.
     Soak(super::soak::SoakArgs),
-    /// Frame time (GPU timestamps) against error (HDR-FLIP, PSNR, SSIM against a cached
+    /// Frame time (wall clock, submit to fence; per-pass GPU timestamps kept) against error (HDR-FLIP, PSNR, SSIM against a cached
     /// path-traced reference) over configurations of the hybrid frame; writes JSON and a chart
     /// (PNG and SVG) with the Pareto front, and caches the result for `render --target-ms`.
     Sweep(SweepArgs),
@@ -143,7 +143,7 @@ struct SweepArgs {
     /// Frames per configuration (static camera); the error is measured on the last.
     #[arg(long, default_value_t = 48)]
     frames: u32,
-    /// The last this-many frames give the median GPU frame time.
+    /// The last this-many frames give the median frame time.
     #[arg(long, default_value_t = 8)]
     timed_frames: u32,
     /// Samples per pixel of the reference (even: it is the mean of two independent halves).

@@ -1,4 +1,4 @@
-//! `hybrid-rt bench frame`: where the default frame's GPU time goes, pass by pass, at the sizes
+//! `hybrid-rt bench frame`: where the default frame's time goes, pass by pass, at the sizes
 //! asked for (src/bench/frame.rs).
 
 use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
@@ -22,7 +22,7 @@ pub struct FrameArgs {
     /// Frames rendered before measuring (pipeline compilation, histories filling).
     #[arg(long, default_value_t = 4)]
     warmup: u32,
-    /// Frames measured; each pass's median is reported.
+    /// Frames measured, each unprofiled and profiled; each pass's median is reported.
     #[arg(long, default_value_t = 8)]
     frames: u32,
     /// Run every pass instead of the scene's frame plan.

@@ -62,7 +62,7 @@ pub struct RenderArgs {
     /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones.
     #[arg(long)]
     shader_dir: Option<PathBuf>,
-    /// Pick the most accurate configuration whose GPU frame time is at most this many ms, from
+    /// Pick the most accurate configuration whose frame time is at most this many ms, from
     /// this scene's speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
     #[arg(long, value_name = "MS", conflicts_with_all = ["target_error", "no_taa", "no_denoise", "gi_bounces"])]
     target_ms: Option<f64>,

@@ -123,11 +123,16 @@ impl Images {
     }
 }
 
-/// GPU time of one pass in the last frame.
+/// Time of one pass in the last frame.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PassTime {
     pub pass: String,
+    /// From timestamp queries around the pass.
     pub gpu_ms: f64,
+    /// Wall clock from the pass's own submission to its fence, when the frame was profiled
+    /// (`Renderer::profile_passes`): on lavapipe the only per-pass figure that includes
+    /// compute dispatches.
+    pub wall_ms: Option<f64>,
 }
 
 pub struct Graph {
@@ -197,8 +202,25 @@ impl Graph {
         self.descs.iter().map(|d| d.name.as_str()).collect()
     }
 
+    pub fn pass_count(&self) -> usize {
+        self.passes.len()
+    }
+
     /// Records every pass with barriers and timestamps into `rec`.
     pub fn record(&mut self, rec: &Recorder, scene: &SceneGpu, frame_index: u32) -> Result<()> {
+        self.record_passes(rec, scene, frame_index, 0..self.passes.len())
+    }
+
+    /// Records the passes in `range` (in order) with their barriers and timestamps. A frame
+    /// may be split over several submissions, in order, each a contiguous range: the first
+    /// one (starting at 0) resets the timestamps.
+    pub fn record_passes(
+        &mut self,
+        rec: &Recorder,
+        scene: &SceneGpu,
+        frame_index: u32,
+        range: std::ops::Range<usize>,
+    ) -> Result<()> {
         if !self.initialised {
             // Everything starts at zero: history images are read before their first write.
             for (image, desc) in self.images.map.values() {
@@ -213,9 +235,11 @@ impl Graph {
             );
             self.initialised = true;
         }
-        self.timestamps.reset(rec.cmd);
+        if range.start == 0 {
+            self.timestamps.reset(rec.cmd);
+        }
         let ctx = PassContext { rec, images: &self.images, scene, extent: self.extent, frame_index };
-        for (i, pass) in self.passes.iter_mut().enumerate() {
+        for (i, pass) in self.passes.iter_mut().enumerate().take(range.end).skip(range.start) {
             let desc = &self.descs[i];
             let reads: Vec<(&str, Access)> =
                 desc.inputs.iter().map(|n| (n.as_str(), Access::read(desc.kind))).collect();
@@ -243,7 +267,7 @@ impl Graph {
                 .descs
                 .iter()
                 .enumerate()
-                .map(|(i, d)| PassTime { pass: d.name.clone(), gpu_ms: ts[2 * i + 1] - ts[2 * i] })
+                .map(|(i, d)| PassTime { pass: d.name.clone(), gpu_ms: ts[2 * i + 1] - ts[2 * i], wall_ms: None })
                 .collect(),
             None => Vec::new(),
         }

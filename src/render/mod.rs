@@ -123,6 +123,9 @@ pub struct Renderer {
     /// 256x256 their sum was ~38 ms where frames took several times that), so per-pass
     /// timestamps are kept only as the split between passes.
     pub last_frame_wall_ms: f64,
+    /// Submit each pass on its own and time it to its fence (`PassTime::wall_ms`): slower
+    /// frames, but per-pass costs where timestamps fall short (`bench frame`).
+    pub profile_passes: bool,
     /// The ray-list tracer, made on first use.
     ray_batch: Option<ray_batch::RayBatch>,
     /// Images the CPU feeds into the frame (tests), by output name.
@@ -218,6 +221,7 @@ impl Renderer {
             last_view: None,
             last_pass_times: Vec::new(),
             last_frame_wall_ms: 0.0,
+            profile_passes: false,
             ray_batch: None,
             injected,
             hdr_output,
@@ -329,13 +333,26 @@ impl Renderer {
         self.scene_gpu.write_frame(&uniforms)?;
         let (graph, scene_gpu, ctx) = (&mut self.graph, &mut self.scene_gpu, &self.ctx);
         let start = std::time::Instant::now();
-        self.pool.run(|cmd| {
-            let rec = Recorder::new(ctx, cmd);
-            scene_gpu.record_update(&rec)?;
-            graph.record(&rec, scene_gpu, frame)
-        })?;
+        let mut pass_wall_ms = Vec::new();
+        if self.profile_passes {
+            self.pool.run(|cmd| scene_gpu.record_update(&Recorder::new(ctx, cmd)))?;
+            for i in 0..graph.pass_count() {
+                let pass_start = std::time::Instant::now();
+                self.pool.run(|cmd| graph.record_passes(&Recorder::new(ctx, cmd), scene_gpu, frame, i..i + 1))?;
+                pass_wall_ms.push(pass_start.elapsed().as_secs_f64() * 1e3);
+            }
+        } else {
+            self.pool.run(|cmd| {
+                let rec = Recorder::new(ctx, cmd);
+                scene_gpu.record_update(&rec)?;
+                graph.record(&rec, scene_gpu, frame)
+            })?;
+        }
         self.last_frame_wall_ms = start.elapsed().as_secs_f64() * 1e3;
         self.last_pass_times = self.graph.pass_times();
+        for (t, ms) in self.last_pass_times.iter_mut().zip(pass_wall_ms) {
+            t.wall_ms = Some(ms);
+        }
         self.cut_pending = false;
         self.prev_view = Some(view);
         self.last_view = Some(view);
@@ -407,7 +424,7 @@ impl Renderer {
         rays: &[crate::accel::bvh::rays::Ray],
         any_hit: bool,
         repeats: u32,
-    ) -> Result<(Vec<ray_batch::HitRecord>, Vec<f64>)> {
+    ) -> Result<(Vec<ray_batch::HitRecord>, Vec<ray_batch::TraceTime>)> {
         if self.ray_batch.is_none() {
             self.ray_batch = Some(ray_batch::RayBatch::new(&self.ctx, shaders, &self.scene_gpu)?);
         }

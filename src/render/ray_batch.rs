@@ -11,6 +11,17 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
+/// The time of one trace of a ray list.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceTime {
+    /// Recording to fence: what a CPU device (lavapipe) spends, and on a GPU the dispatch
+    /// plus one submission's overhead.
+    pub wall_ms: f64,
+    /// Timestamps around the dispatch, where the device has them (lavapipe's can leave
+    /// compute dispatches out, so the bench rates rays by `wall_ms`).
+    pub gpu_ms: Option<f64>,
+}
+
 /// One ray's result, as trace_rays.comp writes it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -52,7 +63,7 @@ impl RayBatch {
 
     /// Traces `rays` (closest hit, or any hit for shadow rays) `repeats` times after one
     /// untimed warm-up (lavapipe compiles a pipeline's code at its first dispatch); returns
-    /// the hits and the GPU time of each repetition in milliseconds (empty without timestamps).
+    /// the hits and the time of each repetition.
     pub fn trace(
         &self,
         ctx: &Arc<Context>,
@@ -61,7 +72,7 @@ impl RayBatch {
         rays: &[Ray],
         any_hit: bool,
         repeats: u32,
-    ) -> Result<(Vec<HitRecord>, Vec<f64>)> {
+    ) -> Result<(Vec<HitRecord>, Vec<TraceTime>)> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let ray_buffer = crate::gpu::upload::device_buffer(ctx, pool, "rays", bytemuck::cast_slice(rays), storage)?;
         let hits = Buffer::new(
@@ -74,6 +85,7 @@ impl RayBatch {
         let push: [u32; 2] = [rays.len() as u32, any_hit as u32];
         let mut times = Vec::new();
         for run in 0..=repeats.max(1) {
+            let start = std::time::Instant::now();
             pool.run(|cmd| {
                 let rec = Recorder::new(ctx, cmd);
                 scene.record_update(&rec)?;
@@ -94,8 +106,10 @@ impl RayBatch {
                 );
                 Ok(())
             })?;
-            if let (true, Some(ts)) = (run > 0, self.timestamps.read_ms(2)) {
-                times.push(ts[1] - ts[0]);
+            let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+            if run > 0 {
+                let gpu_ms = self.timestamps.read_ms(2).map(|ts| ts[1] - ts[0]);
+                times.push(TraceTime { wall_ms, gpu_ms });
             }
         }
         let bytes = hits.mapped().ok_or_else(|| anyhow::anyhow!("hit buffer is not mapped"))?;
