@@ -221,7 +221,9 @@ impl SceneGpu {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let (images, samplers, texture_bindings) = upload_textures(ctx, pool, scene)?;
+        let (images, samplers, mut texture_bindings) = upload_textures(ctx, pool, scene)?;
+        // Unused slots repeat slot 0 (white): every slot is a valid descriptor.
+        texture_bindings.resize(texture_slots(texture_bindings.len()), texture_bindings[0]);
 
         let geometry = accel::Geometry {
             vertices: &vertices,
@@ -328,6 +330,13 @@ impl SceneGpu {
     pub fn write_frame(&mut self, u: &FrameUniforms) -> Result<()> {
         self.frame.write(0, bytemuck::bytes_of(u))
     }
+}
+
+/// The size of the texture array for `count` textures: a power of two, at least 64. The layout
+/// is part of what a driver compiles a pipeline against (lavapipe compiles again, for minutes,
+/// for every new layout), so scenes with different texture counts should share one.
+fn texture_slots(count: usize) -> usize {
+    count.next_power_of_two().max(64)
 }
 
 fn scene_bindings(texture_count: u32) -> Vec<Binding> {
