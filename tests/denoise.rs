@@ -5,6 +5,7 @@
 //!   by the stated factors. Error: relative MSE, mean((test - ref)^2 / (ref^2 + 0.01)) over RGB,
 //!   the usual measure for renderings, which a few very bright pixels (the ceiling light and its
 //!   edges) cannot dominate as they do a plain RMSE.
+//!
 //! The reference is the path tracer limited to two scattering events (what the hybrid frame
 //! models; tests/hybrid.rs checks that the undenoised frames converge to it).
 

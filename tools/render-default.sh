@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Quick start, command 1 of 2: installs what is missing (tools/setup.sh), builds hybrid-rt in
-# release mode and renders the built-in default scene (the Cornell box) to out/default.png.
+# Quick start, command 1 of 2: installs what is missing (tools/setup.sh), builds hybrid-rt (the
+# dev profile, which Cargo.toml optimises) and renders the built-in default scene (the Cornell
+# box) to out/default.png.
 # Extra arguments go to `hybrid-rt render`, e.g. `tools/render-default.sh --size 1280x720`.
 set -euo pipefail
 cd "$(dirname "$0")/.."

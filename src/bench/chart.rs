@@ -203,7 +203,8 @@ where
     chart
         .configure_mesh()
         .x_desc(format!(
-            "frame time, ms (wall clock, record to fence; median of {} frames after {} warm-up)",
+            "frame time, ms (wall clock, record to fence; median of {} round(s) x {} frames after {} warm-up)",
+            s.rounds.max(1),
             s.timed_frames,
             s.frames - s.timed_frames
         ))
@@ -327,6 +328,7 @@ mod tests {
             driver: "test driver".into(),
             frames: 48,
             timed_frames: 8,
+            rounds: 1,
             reference: ReferenceInfo { path: "r.exr".into(), cached: false, seconds: 1.0, made },
             pareto_front: points.iter().filter(|p| p.pareto).map(|p| p.name.clone()).collect(),
             points,

@@ -18,9 +18,10 @@
 //!
 //! The generators are in src/accel/bvh/rays.rs. Hit counts are printed beside the rates so
 //! two tracers can be checked to have done the same work. Trace times are wall clock from
-//! recording to fence (median of the repeats): lavapipe's timestamp queries can leave compute
-//! dispatches out, and on a CPU device the wall clock is the cost. The timestamps around the
-//! dispatch are kept in the JSON (`gpu_ms`) for GPUs, where they exclude submission overhead.
+//! recording to fence (median of the repeats), the one clock every bench here uses: lavapipe's
+//! timestamp queries miss most compute passes inside a frame (see bench/frame.rs), though they
+//! time this lone dispatch right (within 0.5 ms of the wall clock). The timestamps are kept in
+//! the JSON (`gpu_ms`) for GPUs, where they exclude the submission's overhead.
 //! Build times are wall clock.
 
 use super::median;

@@ -3,10 +3,10 @@
 //! measured twice over:
 //!
 //! - **Frame time**: the wall-clock time of one frame from recording to its fence; the median
-//!   over the last `timed_frames` of the run (the first frames include lavapipe's pipeline
-//!   compilation and histories that are still filling). The per-pass split comes from GPU
+//!   over the last `timed_frames` of each of `rounds` runs (the first frames include lavapipe's
+//!   pipeline compilation and histories that are still filling). The per-pass split comes from GPU
 //!   timestamp queries and is kept beside it, with their sum: on a GPU the two agree to within
-//!   the recording cost, on lavapipe the timestamps leave compute dispatches out.
+//!   the recording cost, on lavapipe the timestamps miss most compute passes.
 //! - **Error**: HDR-FLIP (and PSNR, SSIM after ACES + sRGB) of the frame after `frames` frames
 //!   (static camera, `frame_dt` 0, so the temporal passes converge as far as they do) against
 //!   the reference path tracer at the same size.
@@ -151,7 +151,7 @@ pub const DEFAULT_CONFIGS: &[&str] = &[
     "d0-s5-b1-r1",
     "d1-s5-b1-r1",
     "d2-s5-b1-r1",
-    "d4-s5-b1-r1", // the renderer's defaults
+    "d4-s5-b1-r1",    // the renderer's defaults
     "d4-s5-b1-r1-f1", // the same with every pass: what the frame plan saves and costs
     "d4-s5-b1-r1-t0",
     "d4-s1-b1-r1",
@@ -177,6 +177,12 @@ pub struct Options {
     pub frames: u32,
     /// The last this-many frames give the median frame time (must be fewer than `frames`).
     pub timed_frames: u32,
+    /// Timing rounds: every configuration is run this many times, one round over all of them
+    /// after another, and its frame time is the median of all rounds' timed frames. A shared
+    /// 2-core machine drifts by tens of percent over minutes; rounds spread the drift over every
+    /// configuration instead of charging it to whichever ran at the time. The error comes
+    /// from the first round.
+    pub rounds: u32,
     pub reference_spp: u32,
     /// Scattering events per reference path at most.
     pub reference_bounces: u32,
@@ -239,7 +245,7 @@ pub struct Point {
     /// The wall-clock time of each timed frame.
     pub frame_ms_samples: Vec<f64>,
     /// Median of the summed per-pass GPU timestamps (what the driver reports; on lavapipe it
-    /// leaves compute dispatches out).
+    /// misses most compute passes).
     #[serde(default)]
     pub timestamp_ms: f64,
     pub passes: Vec<PassMs>,
@@ -276,6 +282,9 @@ pub struct SceneSweep {
     pub driver: String,
     pub frames: u32,
     pub timed_frames: u32,
+    /// Timing rounds (see `Options::rounds`; 0 in sweeps cached before rounds existed).
+    #[serde(default)]
+    pub rounds: u32,
     pub reference: ReferenceInfo,
     pub points: Vec<Point>,
     /// Names of the configurations on the Pareto front, fastest first.
@@ -455,19 +464,24 @@ fn reference(
     Ok((img, info(false, made)))
 }
 
-/// Renders one configuration and measures its frame time and error.
-#[allow(clippy::too_many_arguments)] // one call site; a struct would only rename these
-fn measure(
+/// What one run of a configuration timed, and its last frame.
+struct Run {
+    totals: Vec<f64>,
+    stamps: Vec<f64>,
+    per_pass: Vec<(String, Vec<f64>)>,
+    last_frame: CpuImage,
+}
+
+/// Renders `opts.frames` frames of one configuration, timing the last `timed_frames`.
+fn run_config(
     ctx: &std::sync::Arc<Context>,
     shaders: &ShaderLibrary,
     scene: &Scene,
     backend: Backend,
     opts: &Options,
     config: Config,
-    reference: &CpuImage,
     bar: &indicatif::ProgressBar,
-) -> Result<Point> {
-    let start = Instant::now();
+) -> Result<Run> {
     let mut settings = Settings { width: opts.width, height: opts.height, frame_dt: 0.0, ..Default::default() };
     config.apply(&mut settings);
     let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
@@ -490,8 +504,13 @@ fn measure(
         }
     }
     let out = r.hdr_output().to_string();
-    let img = r.read_output(&out)?;
-    drop(r);
+    let last_frame = r.read_output(&out)?;
+    Ok(Run { totals, stamps, per_pass, last_frame })
+}
+
+/// Measures one configuration's error (and first round's times) from its first run.
+fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Result<Point> {
+    let Run { totals, stamps, per_pass, last_frame: img } = run;
     let name = config.to_string();
     let flip =
         metrics::hdr_flip(reference, &img, &HdrFlipOptions::default()).with_context(|| format!("{name}: FLIP"))?;
@@ -509,7 +528,7 @@ fn measure(
         psnr_db: psnr.is_finite().then_some(psnr),
         ssim,
         pareto: false,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds,
     })
 }
 
@@ -536,13 +555,25 @@ pub fn sweep_scene(
     let start = Instant::now();
     let hash = scene_hash(spec)?;
     let (reference, reference_info) = reference(ctx, shaders, spec, scene, backend, opts, &hash)?;
-    let bar = crate::cli::progress_bar(opts.configs.len() as u64 * opts.frames as u64, "frames");
-    let mut points = Vec::new();
-    for &config in &opts.configs {
-        bar.set_message(config.to_string());
-        let p = measure(ctx, shaders, scene, backend, opts, config, &reference, &bar)?;
-        log::info!("{}: {:.2} ms, FLIP {:.4}", p.name, p.frame_ms, p.flip);
-        points.push(p);
+    let rounds = opts.rounds.max(1);
+    let bar = crate::cli::progress_bar(opts.configs.len() as u64 * opts.frames as u64 * rounds as u64, "frames");
+    let mut points: Vec<Point> = Vec::new();
+    for round in 0..rounds {
+        for (i, &config) in opts.configs.iter().enumerate() {
+            bar.set_message(format!("{config} (round {}/{rounds})", round + 1));
+            let run_start = Instant::now();
+            let run = run_config(ctx, shaders, scene, backend, opts, config, &bar)?;
+            if round == 0 {
+                let p = measure(config, run, &reference, run_start.elapsed().as_secs_f64())?;
+                log::info!("{}: {:.2} ms, FLIP {:.4}", p.name, p.frame_ms, p.flip);
+                points.push(p);
+            } else {
+                let p = &mut points[i];
+                p.frame_ms_samples.extend(run.totals);
+                p.frame_ms = median(&p.frame_ms_samples);
+                p.seconds += run_start.elapsed().as_secs_f64();
+            }
+        }
     }
     bar.finish_and_clear();
     let measured: Vec<Measured> = points.iter().map(Point::measured).collect();
@@ -562,6 +593,7 @@ pub fn sweep_scene(
         driver: ctx.caps.driver.clone(),
         frames: opts.frames,
         timed_frames: opts.timed_frames,
+        rounds,
         reference: reference_info,
         pareto_front: front.iter().map(|&i| points[i].name.clone()).collect(),
         points,
@@ -582,12 +614,13 @@ pub fn sweep_scene(
 /// A table of a sweep's points for the terminal; `*` marks the Pareto front.
 pub fn table(s: &SceneSweep) -> String {
     let mut t = format!(
-        "{} ({}x{}, {} backend, {} frames, reference {} spp{}; reference noise FLIP {:.4})\n",
+        "{} ({}x{}, {} backend, {} frames, {} timing round(s), reference {} spp{}; reference noise FLIP {:.4})\n",
         s.scene_name,
         s.width,
         s.height,
         s.backend,
         s.frames,
+        s.rounds.max(1),
         s.reference.made.spp,
         if s.reference.cached { ", cached" } else { "" },
         s.reference.made.noise_flip
@@ -614,8 +647,16 @@ pub fn table(s: &SceneSweep) -> String {
     for full in s.points.iter().filter(|p| p.config.full) {
         let planned = Config { full: false, ..full.config };
         if let Some(p) = s.points.iter().find(|p| p.config == planned) {
+            let pass_names = |x: &Point| x.passes.iter().map(|m| m.pass.clone()).collect::<Vec<_>>();
+            // Where the plan leaves nothing out the two run the same passes, and any
+            // difference is the machine's noise.
+            let note = if pass_names(p) == pass_names(full) {
+                " (the plan leaves nothing out on this scene: the same passes ran, so this is noise)"
+            } else {
+                ""
+            };
             t += &format!(
-                "  frame plan ({}) against every pass ({}): {:+.1}% frame time, FLIP {:+.4}\n",
+                "  frame plan ({}) against every pass ({}): {:+.1}% frame time, FLIP {:+.4}{note}\n",
                 p.name,
                 full.name,
                 100.0 * (p.frame_ms / full.frame_ms - 1.0),

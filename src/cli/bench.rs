@@ -146,6 +146,10 @@ struct SweepArgs {
     /// The last this-many frames give the median frame time.
     #[arg(long, default_value_t = 8)]
     timed_frames: u32,
+    /// Timing rounds over all configurations; each one's frame time is the median over all
+    /// rounds (the error comes from the first).
+    #[arg(long, default_value_t = 3)]
+    rounds: u32,
     /// Samples per pixel of the reference (even: it is the mean of two independent halves).
     #[arg(long, default_value_t = 512)]
     reference_spp: u32,
@@ -218,6 +222,7 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
                 configs: configs.clone(),
                 frames: a.frames,
                 timed_frames: a.timed_frames,
+                rounds: a.rounds,
                 reference_spp: a.reference_spp,
                 reference_bounces: a.reference_bounces,
                 camera: a.camera.clone().unwrap_or_default(),

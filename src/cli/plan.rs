@@ -2,8 +2,8 @@
 //! plan of src/render/plan.rs, which `render` uses unless `--full` is given).
 
 use super::SceneArgs;
-use crate::render::plan::FramePlan;
 use crate::render::Settings;
+use crate::render::plan::FramePlan;
 use anyhow::Result;
 use clap::Args;
 
@@ -23,10 +23,19 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&plan)?);
         return Ok(());
     }
-    println!("frame plan for {} ({} triangles, {} instances, {} lights):", scene.name, scene.triangle_count(), scene.instances.len(), scene.lights.len());
+    println!(
+        "frame plan for {} ({} triangles, {} instances, {} lights):",
+        scene.name,
+        scene.triangle_count(),
+        scene.instances.len(),
+        scene.lights.len()
+    );
     let on = |b: bool| if b { "runs" } else { "skipped" };
     println!("  gbuffer                  runs");
-    println!("  shadows                  runs ({})", if plan.soft_shadows { "adaptive soft shadows" } else { "one hard ray per light" });
+    println!(
+        "  shadows                  runs ({})",
+        if plan.soft_shadows { "adaptive soft shadows" } else { "one hard ray per light" }
+    );
     println!("  shadows_penumbra/tent/filter {}", on(plan.soft_shadows));
     println!("  gi                       {}", on(plan.gi));
     println!("  reflections              {}", on(plan.reflections));

@@ -149,7 +149,8 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     bar.finish_and_clear();
 
     if ext.as_deref() == Some("exr") {
-        let img = renderer.read_output(&renderer.hdr_output().to_string())?;
+        let hdr = renderer.hdr_output().to_owned();
+        let img = renderer.read_output(&hdr)?;
         image_io::write_exr(&a.out, &img, image_io::channel_names(img.channels))?;
     } else {
         let img = renderer.read_output(render::DISPLAY_OUTPUT)?;

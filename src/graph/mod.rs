@@ -298,7 +298,8 @@ fn zero_image(name: &str) -> Option<OutputDesc> {
         None => (rest, false),
     };
     let format = vk::Format::from_raw(raw.parse().ok()?);
-    let desc = OutputDesc { name: name.to_string(), format, usage: Usage::Storage, preview: Preview::Scalar, extent: None };
+    let desc =
+        OutputDesc { name: name.to_string(), format, usage: Usage::Storage, preview: Preview::Scalar, extent: None };
     Some(if small { desc.with_extent(1, 1) } else { desc })
 }
 

@@ -207,7 +207,7 @@ mod tests {
             for roughness in [0.05, 0.3, 0.6, 1.0] {
                 let b = Brdf { base: DVec3::ONE, metallic, roughness };
                 for mu in [0.05, 0.2, 0.5, 1.0] {
-                    let e = albedo(&b, &table, mu).x;
+                    let e = albedo(&b, table, mu).x;
                     // Quadrature of a sharp lobe is noisy at low roughness: 1% slack.
                     assert!(e <= 1.01, "metallic {metallic} roughness {roughness} mu {mu}: albedo {e}");
                     if metallic == 0.0 && roughness >= 0.3 {
@@ -225,7 +225,7 @@ mod tests {
         let table = energy_table();
         let b = Brdf { base: DVec3::new(0.8, 0.5, 0.2), metallic: 0.2, roughness: 0.4 };
         let (v, l) = (DVec3::new(0.3, 0.1, 0.9).normalize(), DVec3::new(-0.7, 0.2, 0.4).normalize());
-        let (fvl, flv) = (b.eval_cos(&table, DVec3::Z, v, l) / l.z, b.eval_cos(&table, DVec3::Z, l, v) / v.z);
+        let (fvl, flv) = (b.eval_cos(table, DVec3::Z, v, l) / l.z, b.eval_cos(table, DVec3::Z, l, v) / v.z);
         assert!((fvl - flv).length() < 1e-9, "f(v,l) {fvl} != f(l,v) {flv}");
     }
 
@@ -233,10 +233,10 @@ mod tests {
     fn table_matches_known_limits() {
         let table = energy_table();
         // A mirror (roughness 0) at normal incidence returns F0 exactly: A = 1, B = 0.
-        let [a, b] = lookup(&table, 1.0, 0.0);
+        let [a, b] = lookup(table, 1.0, 0.0);
         assert!((a - 1.0).abs() < 1e-3 && b.abs() < 1e-3, "mirror at normal incidence: A {a}, B {b}");
         // Rough lobes lose energy to single scattering: A + B (F0 = 1) below 1.
-        let [a, b] = lookup(&table, 0.5, 1.0);
+        let [a, b] = lookup(table, 0.5, 1.0);
         assert!(a + b < 0.9 && a + b > 0.3, "roughness 1: A + B = {}", a + b);
     }
 }

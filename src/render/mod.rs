@@ -7,8 +7,8 @@ mod deform;
 pub mod environment;
 pub mod frame;
 pub mod lights;
-pub mod plan;
 mod mips;
+pub mod plan;
 pub mod ray_batch;
 pub mod scene_gpu;
 

@@ -91,7 +91,8 @@ impl FramePlan {
 
 fn list(names: &[&str]) -> String {
     const SHOWN: usize = 6;
-    let mut s = names.iter().take(SHOWN).map(|n| if n.is_empty() { "(unnamed)" } else { n }).collect::<Vec<_>>().join(", ");
+    let mut s =
+        names.iter().take(SHOWN).map(|n| if n.is_empty() { "(unnamed)" } else { n }).collect::<Vec<_>>().join(", ");
     if names.len() > SHOWN {
         s.push_str(&format!(" and {} more", names.len() - SHOWN));
     }
