@@ -662,6 +662,7 @@ impl Viewer {
             backend: self.backend.variant(),
             backend_why: &self.backend_why,
             pass_times: &self.renderer.last_pass_times,
+            frame_wall_ms: self.renderer.last_frame_wall_ms,
             outputs: &self.renderer.graph.output_order,
             view: &self.view,
             cameras: &self.cameras,

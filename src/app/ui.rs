@@ -13,6 +13,8 @@ pub struct Info<'a> {
     pub backend: &'a str,
     pub backend_why: &'a str,
     pub pass_times: &'a [PassTime],
+    /// The last frame's wall clock, recording to fence (timestamps can miss compute passes).
+    pub frame_wall_ms: f64,
     /// Every named output of the frame, in capture order.
     pub outputs: &'a [String],
     pub view: &'a str,
@@ -105,6 +107,9 @@ pub fn draw(ctx: &egui::Context, info: &Info, settings: &mut Settings) -> Vec<Ac
                     }
                     ui.strong("total");
                     ui.monospace(format!("{total:8.3} ms"));
+                    ui.end_row();
+                    ui.strong("frame, wall clock");
+                    ui.monospace(format!("{:8.3} ms", info.frame_wall_ms));
                     ui.end_row();
                 });
             });

@@ -157,9 +157,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         let rgba: Vec<u8> = img.as_f32().unwrap_or(&[]).iter().map(|v| (v * 255.0).round() as u8).collect();
         image_io::write_png_rgba8(&a.out, width, height, &rgba)?;
     }
-    let gpu_ms: f64 = renderer.last_pass_times.iter().map(|t| t.gpu_ms).sum();
+    // Wall clock: timestamps can miss compute passes (lavapipe), see `bench frame`.
+    let frame_ms = renderer.last_frame_wall_ms;
     println!(
-        "wrote {} ({width}x{height}, {} frame(s), {} backend, last frame {gpu_ms:.2} ms GPU on {})",
+        "wrote {} ({width}x{height}, {} frame(s), {} backend, last frame {frame_ms:.2} ms on {})",
         a.out.display(),
         a.frames,
         picked.variant(),
