@@ -151,20 +151,13 @@ pub fn build_blases(
     let align = scratch_alignment(ctx);
     let geoms: Vec<_> = geometries.iter().map(BlasGeometry::vk).collect();
     for (i, g) in geometries.iter().enumerate() {
-        let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-            .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
-            .flags(blas_flags(allow_update[i], !allow_update[i]))
-            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-            .geometries(std::slice::from_ref(&geoms[i]));
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        unsafe {
-            loader.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &info,
-                &[g.triangle_count],
-                &mut sizes,
-            )
-        };
+        let sizes = build_sizes(
+            loader,
+            vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+            blas_flags(allow_update[i], !allow_update[i]),
+            &geoms[i],
+            g.triangle_count,
+        );
         structs.push(AccelStruct::new(
             ctx,
             &format!("blas {i}"),
@@ -304,21 +297,13 @@ impl BlasRefitter {
         let mut offsets = Vec::with_capacity(geometries.len());
         let mut total = 0u64;
         for g in geometries {
-            let geom = [g.vk()];
-            let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-                .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
-                .flags(blas_flags(true, false))
-                .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-                .geometries(&geom);
-            let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-            unsafe {
-                loader.get_acceleration_structure_build_sizes(
-                    vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                    &info,
-                    &[g.triangle_count],
-                    &mut sizes,
-                )
-            };
+            let sizes = build_sizes(
+                loader,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                blas_flags(true, false),
+                &g.vk(),
+                g.triangle_count,
+            );
             offsets.push(total);
             total += sizes.build_scratch_size.max(sizes.update_scratch_size).div_ceil(align) * align;
         }
@@ -440,21 +425,13 @@ impl Tlas {
                 | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
             MemoryLocation::CpuToGpu,
         )?;
-        let geom = [Self::geometry(instances.address)];
-        let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
-            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
-            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-            .geometries(&geom);
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        unsafe {
-            loader.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &info,
-                &[count],
-                &mut sizes,
-            )
-        };
+        let sizes = build_sizes(
+            loader,
+            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+            vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE,
+            &Self::geometry(instances.address),
+            count,
+        );
         let accel = AccelStruct::new(
             ctx,
             "tlas",
@@ -549,4 +526,30 @@ impl Tlas {
         );
         Ok(())
     }
+}
+
+/// Sizes of the structure, build scratch and update scratch for one geometry of `primitives`
+/// triangles or instances.
+fn build_sizes(
+    loader: &ash::khr::acceleration_structure::Device,
+    ty: vk::AccelerationStructureTypeKHR,
+    flags: vk::BuildAccelerationStructureFlagsKHR,
+    geometry: &vk::AccelerationStructureGeometryKHR,
+    primitives: u32,
+) -> vk::AccelerationStructureBuildSizesInfoKHR<'static> {
+    let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .ty(ty)
+        .flags(flags)
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(std::slice::from_ref(geometry));
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    unsafe {
+        loader.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            &info,
+            &[primitives],
+            &mut sizes,
+        )
+    };
+    sizes
 }
