@@ -43,15 +43,6 @@ fn images(r: &mut Renderer) -> Vec<CpuImage> {
     .unwrap()
 }
 
-/// True when all 8 neighbours see the same instance in the G-buffer (not a silhouette).
-fn interior(ids: &CpuImage, x: u32, y: u32) -> bool {
-    if x == 0 || y == 0 || x + 1 >= ids.width || y + 1 >= ids.height {
-        return false;
-    }
-    let id = ids.get_u32(x, y, 0);
-    (-1i32..=1).all(|dy| (-1i32..=1).all(|dx| ids.get_u32((x as i32 + dx) as u32, (y as i32 + dy) as u32, 0) == id))
-}
-
 /// Instances whose material is alpha-tested. The rasteriser picks their texture's mip level
 /// from screen derivatives and rays read level 0, so near the cutoff the two can disagree on
 /// alpha; the G-buffer comparison skips them (alpha testing itself is checked against the
@@ -72,7 +63,7 @@ fn check_against_gbuffer(name: &str, img: &[CpuImage], masked: &[u32]) {
     let mut checked = 0;
     for y in 0..H {
         for x in 0..W {
-            if !interior(ids, x, y) {
+            if !common::interior(ids, x, y) {
                 continue;
             }
             let gid = ids.get_u32(x, y, 0);
@@ -91,49 +82,11 @@ fn check_against_gbuffer(name: &str, img: &[CpuImage], masked: &[u32]) {
     assert!(checked > 100, "{name}: only {checked} interior pixels");
 }
 
-/// Distance of a hit from its triangle's nearest edge, in barycentric units.
-fn edge_distance(img: &[CpuImage], x: u32, y: u32) -> f32 {
-    let (u, v) = (img[5].get(x, y, 0), img[5].get(x, y, 1));
-    u.min(v).min(1.0 - u - v)
-}
-
-/// Compares two backends' primary hits and shadow masks; returns the number of ties.
-///
-/// Equal means: the same instance and triangle at t within 1e-4 relative. A tie is a ray
-/// through an edge (both hits within 1e-4 of an edge in barycentric terms) that the backends
-/// give to different triangles, of one instance or of two instances sharing the edge, at the
-/// same t; two instances whose surfaces coincide, hit at the same t; or a ray grazing an
-/// outer edge that one backend hits and the other misses. Ties
-/// are allowed and counted; anything else fails.
+/// Compares two backends' primary hits (see `common::compare_primary_hits`; coincident
+/// surfaces of two instances, as in some models, are ties) and their shadow masks, which must
+/// be equal; returns the number of ties.
 fn check_backends_agree(name: &str, a: &[CpuImage], b: &[CpuImage]) -> usize {
-    let on_edge = |img: &[CpuImage], x, y| edge_distance(img, x, y) < 1e-4;
-    let mut ties = 0;
-    for y in 0..H {
-        for x in 0..W {
-            let (ia, ib) = (a[0].get_u32(x, y, 0), b[0].get_u32(x, y, 0));
-            if ia == NO_ID && ib == NO_ID {
-                continue;
-            }
-            if ia == NO_ID || ib == NO_ID {
-                let hit = if ia == NO_ID { b } else { a };
-                assert!(on_edge(hit, x, y), "{name}: only one backend hits at ({x},{y}), away from any edge");
-                ties += 1;
-                continue;
-            }
-            let (ta, tb) = (f32::from_bits(a[0].get_u32(x, y, 2)), f32::from_bits(b[0].get_u32(x, y, 2)));
-            assert!((ta - tb).abs() <= 1e-4 * ta.abs().max(tb.abs()), "{name}: t differs at ({x},{y}): {ta} vs {tb}");
-            if ia != ib || a[0].get_u32(x, y, 1) != b[0].get_u32(x, y, 1) {
-                // Two instances with coincident surfaces (coplanar overlap in the model) are
-                // hit at the same t anywhere, not only on edges.
-                let coincident = ia != ib && (ta - tb).abs() <= 1e-6 * ta.abs();
-                assert!(
-                    coincident || (on_edge(a, x, y) && on_edge(b, x, y)),
-                    "{name}: different triangles at ({x},{y}) away from an edge (instances {ia}/{ib}, t {ta}/{tb})"
-                );
-                ties += 1;
-            }
-        }
-    }
+    let ties = common::compare_primary_hits(name, (&a[0], &a[5]), (&b[0], &b[5]), true);
     // Shadow rays start from the G-buffer, so both backends trace identical shadow rays.
     let mut shadow_diff = 0;
     for y in 0..H {

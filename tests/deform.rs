@@ -62,15 +62,6 @@ fn render(ctx: &Arc<Context>, backend: Backend) -> (Renderer, Vec<Vec<CpuImage>>
     (r, images)
 }
 
-/// True when all 8 neighbours see the same instance in the G-buffer (not a silhouette).
-fn interior(ids: &CpuImage, x: u32, y: u32) -> bool {
-    if x == 0 || y == 0 || x + 1 >= ids.width || y + 1 >= ids.height {
-        return false;
-    }
-    let id = ids.get_u32(x, y, 0);
-    (-1i32..=1).all(|dy| (-1i32..=1).all(|dx| ids.get_u32((x as i32 + dx) as u32, (y as i32 + dy) as u32, 0) == id))
-}
-
 /// Primary rays see the G-buffer's instance and depth away from silhouettes, on the sheet
 /// in particular.
 fn check_against_gbuffer(name: &str, img: &[CpuImage]) {
@@ -78,7 +69,7 @@ fn check_against_gbuffer(name: &str, img: &[CpuImage]) {
     let mut on_sheet = 0;
     for y in 0..H {
         for x in 0..W {
-            if !interior(ids, x, y) {
+            if !common::interior(ids, x, y) {
                 continue;
             }
             let gid = ids.get_u32(x, y, 0);
@@ -92,41 +83,6 @@ fn check_against_gbuffer(name: &str, img: &[CpuImage]) {
         }
     }
     assert!(on_sheet > 300, "{name}: only {on_sheet} interior pixels on the sheet");
-}
-
-/// The two backends' primary hits: the same instance and triangle at t within 1e-4
-/// relative, except rays through a shared edge (barycentric distance < 1e-4), which may
-/// report either triangle; returns those ties.
-fn check_backends_agree(name: &str, a: &[CpuImage], b: &[CpuImage]) -> usize {
-    let on_edge = |img: &[CpuImage], x, y| {
-        let (u, v) = (img[4].get(x, y, 0), img[4].get(x, y, 1));
-        u.min(v).min(1.0 - u - v) < 1e-4
-    };
-    let mut ties = 0;
-    for y in 0..H {
-        for x in 0..W {
-            let (ia, ib) = (a[0].get_u32(x, y, 0), b[0].get_u32(x, y, 0));
-            if ia == NO_ID && ib == NO_ID {
-                continue;
-            }
-            if ia == NO_ID || ib == NO_ID {
-                let hit = if ia == NO_ID { b } else { a };
-                assert!(on_edge(hit, x, y), "{name}: only one backend hits at ({x},{y}), away from any edge");
-                ties += 1;
-                continue;
-            }
-            let (ta, tb) = (f32::from_bits(a[0].get_u32(x, y, 2)), f32::from_bits(b[0].get_u32(x, y, 2)));
-            assert!((ta - tb).abs() <= 1e-4 * ta.abs().max(tb.abs()), "{name}: t differs at ({x},{y}): {ta} vs {tb}");
-            if ia != ib || a[0].get_u32(x, y, 1) != b[0].get_u32(x, y, 1) {
-                assert!(
-                    on_edge(a, x, y) && on_edge(b, x, y),
-                    "{name}: different triangles at ({x},{y}) away from an edge (instances {ia}/{ib})"
-                );
-                ties += 1;
-            }
-        }
-    }
-    ties
 }
 
 /// The renderer's scene with the sheet deformed as at `pose`: what a BVH built from scratch
@@ -195,7 +151,7 @@ fn deforming_mesh_agrees_across_backends_refits_and_rebuilds() {
         );
         for ((frame, c), q) in CHECKED.iter().zip(&compute).zip(&query) {
             check_against_gbuffer(&format!("ray query, frame {frame}"), q);
-            let ties = check_backends_agree(&format!("frame {frame}"), c, q);
+            let ties = common::compare_primary_hits(&format!("frame {frame}"), (&c[0], &c[4]), (&q[0], &q[4]), false);
             assert!(ties < (W * H / 50) as usize, "frame {frame}: {ties} edge ties");
         }
         let (hits, _) = rq.trace_rays(&shaders, &rays, false, 0).unwrap();

@@ -2,6 +2,8 @@
 #![allow(dead_code)] // each test binary uses a different subset of these helpers
 
 use hybrid_rt::gpu::{Context, ContextOptions};
+use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes::gbuffer::NO_ID;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -49,4 +51,61 @@ pub fn default_scene() -> PathBuf {
 /// The backend `--backend auto` would pick on this device.
 pub fn auto_backend(ctx: &Context) -> hybrid_rt::backend::Backend {
     hybrid_rt::backend::resolve(&ctx.caps, hybrid_rt::backend::BackendChoice::Auto).expect("auto backend").0
+}
+
+/// True when all 8 neighbours see the same instance in the G-buffer (not a silhouette).
+pub fn interior(ids: &CpuImage, x: u32, y: u32) -> bool {
+    if x == 0 || y == 0 || x + 1 >= ids.width || y + 1 >= ids.height {
+        return false;
+    }
+    let id = ids.get_u32(x, y, 0);
+    (-1i32..=1).all(|dy| (-1i32..=1).all(|dx| ids.get_u32((x as i32 + dx) as u32, (y as i32 + dy) as u32, 0) == id))
+}
+
+/// Compares two backends' primary hits (`primary_rays.hit` and `.bary` of each); returns the
+/// number of ties.
+///
+/// Equal means: the same instance and triangle at t within 1e-4 relative. A tie is a ray
+/// through an edge (both hits within 1e-4 of an edge in barycentric terms) that the backends
+/// give to different triangles, of one instance or of two instances sharing the edge, at the
+/// same t; or a ray grazing an outer edge that one backend hits and the other misses. With
+/// `coincident_surfaces`, two instances hit at the same t (within 1e-6) anywhere are a tie too
+/// (scenes with coplanar overlapping instances). Ties are allowed and counted; anything else
+/// fails.
+pub fn compare_primary_hits(
+    name: &str,
+    (hit_a, bary_a): (&CpuImage, &CpuImage),
+    (hit_b, bary_b): (&CpuImage, &CpuImage),
+    coincident_surfaces: bool,
+) -> usize {
+    let on_edge = |bary: &CpuImage, x, y| {
+        let (u, v) = (bary.get(x, y, 0), bary.get(x, y, 1));
+        u.min(v).min(1.0 - u - v) < 1e-4
+    };
+    let mut ties = 0;
+    for y in 0..hit_a.height {
+        for x in 0..hit_a.width {
+            let (ia, ib) = (hit_a.get_u32(x, y, 0), hit_b.get_u32(x, y, 0));
+            if ia == NO_ID && ib == NO_ID {
+                continue;
+            }
+            if ia == NO_ID || ib == NO_ID {
+                let bary = if ia == NO_ID { bary_b } else { bary_a };
+                assert!(on_edge(bary, x, y), "{name}: only one backend hits at ({x},{y}), away from any edge");
+                ties += 1;
+                continue;
+            }
+            let (ta, tb) = (f32::from_bits(hit_a.get_u32(x, y, 2)), f32::from_bits(hit_b.get_u32(x, y, 2)));
+            assert!((ta - tb).abs() <= 1e-4 * ta.abs().max(tb.abs()), "{name}: t differs at ({x},{y}): {ta} vs {tb}");
+            if ia != ib || hit_a.get_u32(x, y, 1) != hit_b.get_u32(x, y, 1) {
+                let coincident = coincident_surfaces && ia != ib && (ta - tb).abs() <= 1e-6 * ta.abs();
+                assert!(
+                    coincident || (on_edge(bary_a, x, y) && on_edge(bary_b, x, y)),
+                    "{name}: different triangles at ({x},{y}) away from an edge (instances {ia}/{ib}, t {ta}/{tb})"
+                );
+                ties += 1;
+            }
+        }
+    }
+    ties
 }
