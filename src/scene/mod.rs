@@ -9,7 +9,7 @@
 pub mod animation;
 pub mod builtin;
 pub mod builtin_stability;
-pub mod gltf_loader;
+pub mod gltf;
 pub mod limits;
 pub mod morph;
 pub mod tangents;
@@ -17,7 +17,7 @@ pub mod tangents;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
-pub use gltf_loader::{LoadOptions, load_gltf, load_gltf_bytes};
+pub use self::gltf::{LoadOptions, load_gltf, load_gltf_bytes};
 pub use limits::Limits;
 pub use morph::{Morph, MorphTarget, WeightChannel};
 
