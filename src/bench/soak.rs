@@ -93,7 +93,8 @@ pub fn run(r: &mut Renderer, opts: &Options, progress: &dyn Fn(u32)) -> Result<S
         r.render_frame()?;
         times[n as usize - 1] = t.elapsed().as_secs_f64() * 1e3;
         progress(n);
-        let due = n == opts.warmup || n == opts.frames || (n > opts.warmup && (n - opts.warmup) % opts.every == 0);
+        let due =
+            n == opts.warmup || n == opts.frames || (n > opts.warmup && (n - opts.warmup).is_multiple_of(opts.every));
         if due {
             let interval = &times[last_sample..n as usize];
             samples.push(Sample {

@@ -292,7 +292,7 @@ mod tests {
         let indices: Vec<u32> = quads.flat_map(|i| [i, i + 1, i + n + 1, i, i + n + 1, i + n]).collect();
         assert!(mikktspace_is_tractable(&grid, &indices));
         // The same corners all at the origin (with -0 and +0 mixed): n^4 pairs.
-        let zero = |i: u32| if i % 2 == 0 { 0.0 } else { -0.0 };
+        let zero = |i: u32| if i.is_multiple_of(2) { 0.0 } else { -0.0 };
         let origin: Vec<Vertex> = (0..n * n).map(|i| vertex([zero(i), 0.0, 0.0], [0.0; 2])).collect();
         assert!(!mikktspace_is_tractable(&origin, &indices));
         // A small mesh is always fine, however degenerate.
