@@ -55,11 +55,11 @@ fn glb(gltf: &Value, bin: &[u8]) -> Vec<u8> {
     let mut g = gltf.clone();
     g["buffers"] = json!([{"byteLength": bin.len()}]);
     let mut json = serde_json::to_vec(&g).unwrap();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

@@ -1,10 +1,29 @@
 #!/usr/bin/env bash
 # Quick start, command 2 of 2: installs what is missing (tools/setup.sh), then runs the whole
 # test suite on the local Vulkan device (lavapipe on a machine without a GPU) with the Khronos
-# validation layer on. Extra arguments go to `cargo test`.
+# validation layer on, and checks that Cargo.toml's rust-version is the real minimum
+# (tools/check-msrv.sh). Extra arguments go to `cargo test`.
+#
+# Every test binary runs even when one fails (--no-fail-fast); the end of the output lists each
+# failing binary with its failing tests, and the last line totals all of them in the form of
+# cargo's own `test result:` lines. The exit status is non-zero when anything failed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source tools/env.sh
 bash tools/setup.sh
-echo "[test] cargo test (target folder: $CARGO_TARGET_DIR)"
-cargo test --locked "$@"
+python3 tools/test_summary.py --self-test
+
+log=$(mktemp /tmp/hybrid-rt-test.XXXXXX.log)
+echo "[test] cargo test --no-fail-fast (target folder: $CARGO_TARGET_DIR; log: $log)"
+set +e
+cargo test --locked --no-fail-fast "$@" 2>&1 | tee "$log"
+cargo_status=${PIPESTATUS[0]}
+echo "[test] tools/check-msrv.sh"
+bash tools/check-msrv.sh
+msrv_status=$?
+set -e
+
+checks=()
+if [ "$msrv_status" -eq 0 ]; then checks+=(--passed "msrv check"); else checks+=(--failed "msrv check (tools/check-msrv.sh)"); fi
+echo "[test] summary"
+exec python3 tools/test_summary.py "$log" --cargo-status "$cargo_status" "${checks[@]}"

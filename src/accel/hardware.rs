@@ -176,10 +176,10 @@ impl RayAccel for HardwareAccel {
                 .enumerate()
                 .filter_map(|(i, d)| d.pending.map(|what| (i, &self.blases[d.mesh as usize], what)))
                 .collect();
-            if let (Some(ts), Some(rebuilt)) = (&self.timestamps, self.timed.take()) {
-                if let Some(t) = ts.read_ms(2) {
-                    self.times.add(rebuilt, t[1]);
-                }
+            if let (Some(ts), Some(rebuilt)) = (&self.timestamps, self.timed.take())
+                && let Some(t) = ts.read_ms(2)
+            {
+                self.times.add(rebuilt, t[1]);
             }
             let timestamps = self.timestamps.as_ref().filter(|_| !work.is_empty());
             if let Some(ts) = timestamps {
@@ -213,10 +213,10 @@ impl RayAccel for HardwareAccel {
     fn stats(&self) -> AccelStats {
         let mut stats = self.stats.clone();
         let mut times = self.times;
-        if let (Some(ts), Some(rebuilt)) = (&self.timestamps, self.timed) {
-            if let Some(t) = ts.read_ms(2) {
-                times.add(rebuilt, t[1]);
-            }
+        if let (Some(ts), Some(rebuilt)) = (&self.timestamps, self.timed)
+            && let Some(t) = ts.read_ms(2)
+        {
+            times.add(rebuilt, t[1]);
         }
         times.fill(&mut stats);
         stats

@@ -56,10 +56,10 @@ pub fn dependencies(root: &Path, module: &Path) -> Vec<PathBuf> {
         if let Ok(src) = std::fs::read_to_string(&seen[i]) {
             let dir = seen[i].parent().unwrap_or(root).to_path_buf();
             for inc in includes_of(&src) {
-                if let Some(p) = resolve_include(root, &dir, inc) {
-                    if !seen.contains(&p) {
-                        seen.push(p);
-                    }
+                if let Some(p) = resolve_include(root, &dir, inc)
+                    && !seen.contains(&p)
+                {
+                    seen.push(p);
                 }
             }
         }

@@ -131,7 +131,7 @@ pub fn alpha_shadow() -> Scene {
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
         for x in 0..size {
-            let opaque = (x / cell + y / cell) % 2 == 0;
+            let opaque = (x / cell + y / cell).is_multiple_of(2);
             rgba.extend_from_slice(&[200, 60, 40, if opaque { 255 } else { 0 }]);
         }
     }
@@ -318,7 +318,7 @@ pub fn checker_test() -> Scene {
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
         for x in 0..size {
-            let v = if (x / cell + y / cell) % 2 == 0 { to8(LIGHT) } else { to8(DARK) };
+            let v = if (x / cell + y / cell).is_multiple_of(2) { to8(LIGHT) } else { to8(DARK) };
             rgba.extend_from_slice(&[v, v, v, 255]);
         }
     }

@@ -102,7 +102,7 @@ pub fn slide() -> Scene {
     for y in 0..size {
         for x in 0..size {
             // sRGB 230 and 110: linear albedo 0.79 and 0.16.
-            let v = if (x / cell + y / cell) % 2 == 0 { 230 } else { 110 };
+            let v = if (x / cell + y / cell).is_multiple_of(2) { 230 } else { 110 };
             rgba.extend_from_slice(&[v, v, v, 255]);
         }
     }

@@ -67,10 +67,11 @@ pub fn normalize_tangents(vertices: &mut [Vertex]) {
 ///
 /// MikkTSpace yields a tangent per triangle corner; where corners sharing a vertex disagree
 /// (UV seams, mirrored UVs) the vertex is duplicated, so `vertices` may grow. Returns false,
-/// leaving the mesh unchanged, when MikkTSpace fails.
+/// leaving the mesh unchanged, when MikkTSpace fails (bevy_mikktspace 1.0 has no failure yet,
+/// but its error type is open to new ones).
 pub fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32], uv_set: u32) -> bool {
     let mut geometry = MikkGeometry { vertices, indices, uv_set, corner_tangents: vec![[0.0; 4]; indices.len()] };
-    if !mikktspace::generate_tangents(&mut geometry) {
+    if bevy_mikktspace::generate_tangents(&mut geometry).is_err() {
         return false;
     }
     let corner_tangents = geometry.corner_tangents;
@@ -140,7 +141,7 @@ impl MikkGeometry<'_> {
     }
 }
 
-impl mikktspace::Geometry for MikkGeometry<'_> {
+impl bevy_mikktspace::Geometry for MikkGeometry<'_> {
     fn num_faces(&self) -> usize {
         self.indices.len() / 3
     }
@@ -166,19 +167,17 @@ impl mikktspace::Geometry for MikkGeometry<'_> {
         [s, 1.0 - t]
     }
 
-    fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+    /// MikkTSpace gives no tangent space to a corner of a degenerate triangle that has no
+    /// neighbour to borrow one from (None), and may give a zero one: such corners get an
+    /// arbitrary unit tangent perpendicular to their normal, as in [`orthonormal_tangents`].
+    fn set_tangent(&mut self, space: Option<bevy_mikktspace::TangentSpace>, face: usize, vert: usize) {
+        let normal = Vec3::from(self.vertex(face, vert).normal).try_normalize().unwrap_or(Vec3::Z);
         if let Some(slot) = self.corner_tangents.get_mut(face * 3 + vert) {
-            *slot = sanitize_tangent(tangent);
+            let t = space.map_or(Vec4::ZERO, |s| Vec4::from(s.tangent_encoded()));
+            let xyz = t.truncate().try_normalize().unwrap_or_else(|| normal.any_orthonormal_vector());
+            *slot = xyz.extend(if t.w < 0.0 { -1.0 } else { 1.0 }).to_array();
         }
     }
-}
-
-/// Unit xyz and w = ±1; MikkTSpace leaves degenerate corners with a zero tangent.
-fn sanitize_tangent(t: [f32; 4]) -> [f32; 4] {
-    let v = Vec4::from(t);
-    let xyz = v.truncate().try_normalize().unwrap_or(Vec3::X);
-    let w = if v.w < 0.0 { -1.0 } else { 1.0 };
-    xyz.extend(w).to_array()
 }
 
 #[cfg(test)]
@@ -237,6 +236,21 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_triangles_get_a_unit_tangent_perpendicular_to_the_normal() {
+        // All three corners at one point with one UV: MikkTSpace has no tangent space for them.
+        let n = Vec3::new(0.0, 0.6, 0.8);
+        let corner = Vertex { position: [1.0, 2.0, 3.0], normal: n.to_array(), uv0: [0.5; 2], ..Default::default() };
+        let mut vertices = vec![corner; 3];
+        let mut indices = vec![0, 1, 2];
+        assert!(mikktspace_tangents(&mut vertices, &mut indices, 0));
+        for v in &vertices {
+            let t = Vec4::from(v.tangent);
+            assert!(t.truncate().is_normalized() && t.truncate().dot(n).abs() < 1e-6, "{t:?}");
+            assert!(t.w == 1.0 || t.w == -1.0, "{t:?}");
+        }
+    }
+
+    #[test]
     fn mirrored_uvs_split_shared_vertices() {
         // Two quads sharing the edge x = 1; the right one has u mirrored.
         let mut vertices = vec![
@@ -278,7 +292,7 @@ mod tests {
         let indices: Vec<u32> = quads.flat_map(|i| [i, i + 1, i + n + 1, i, i + n + 1, i + n]).collect();
         assert!(mikktspace_is_tractable(&grid, &indices));
         // The same corners all at the origin (with -0 and +0 mixed): n^4 pairs.
-        let zero = |i: u32| if i % 2 == 0 { 0.0 } else { -0.0 };
+        let zero = |i: u32| if i.is_multiple_of(2) { 0.0 } else { -0.0 };
         let origin: Vec<Vertex> = (0..n * n).map(|i| vertex([zero(i), 0.0, 0.0], [0.0; 2])).collect();
         assert!(!mikktspace_is_tractable(&origin, &indices));
         // A small mesh is always fine, however degenerate.

@@ -206,7 +206,7 @@ fn reference(
         log::info!("reference from the cache: {}", exr.display());
         return Ok((img, info(true, made)));
     }
-    if opts.reference_spp < 2 || opts.reference_spp % 2 != 0 {
+    if opts.reference_spp < 2 || !opts.reference_spp.is_multiple_of(2) {
         bail!("--reference-spp {}: must be even and at least 2 (the reference is two halves)", opts.reference_spp);
     }
     let half = opts.reference_spp / 2;
