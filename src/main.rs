@@ -1,3 +1,7 @@
+//! The `hybrid-rt` binary: logging set up, then the command line (src/cli).
+
+#![deny(unsafe_code)]
+
 use std::process::ExitCode;
 
 fn main() -> ExitCode {

@@ -5,18 +5,20 @@
 //! shaders-glsl is watched and hot-reloaded, keeping the old pipelines when a compile fails.
 //!
 //! One frame is in flight: `Renderer::render_frame` waits for its frame, then the chosen
-//! output is drawn into the swapchain with the overlay on top (see gpu::present).
+//! output is drawn into the swapchain with the overlay on top (gpu::present draws; the egui
+//! side is [`overlay_painter`]).
 //! Scripts (`--script`, see [`script`]) make runs reproducible for tests.
 
 mod camera;
 mod hot_reload;
+mod overlay_painter;
 pub mod script;
 mod tunables;
 mod ui;
 
 use crate::backend::{self, Backend, BackendChoice};
 use crate::capture::{self, Capture};
-use crate::gpu::{Context, ContextOptions, Overlay, Presenter, ShaderLibrary, Shown, Swapchain, vk};
+use crate::gpu::{Context, ContextOptions, Presenter, ShaderLibrary, Shown, Swapchain, vk};
 use crate::graph::Preview;
 use crate::image_io;
 use crate::render::{CameraChoice, Renderer, Settings};
@@ -24,6 +26,7 @@ use crate::scene::Scene;
 use anyhow::{Context as _, Result, anyhow, bail};
 use camera::{Controller, Mode};
 use glam::Vec3;
+use overlay_painter::OverlayFrame;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use script::Command;
 use std::collections::{HashSet, VecDeque};
@@ -72,7 +75,7 @@ pub fn run(opts: ViewOptions) -> Result<()> {
     drop(viewer);
     result?;
     match ctx {
-        Some(ctx) => crate::cli::finish_validation(ctx),
+        Some(ctx) => crate::gpu::finish_validation(ctx),
         None => Ok(()),
     }
 }
@@ -630,11 +633,8 @@ impl Viewer {
             Some((width, height, texels)) => Shown::Rgba { width: *width, height: *height, texels },
             None => Shown::Graph(self.renderer.graph.image(&name).expect("checked above")),
         };
-        let overlay = overlay.as_ref().map(|(primitives, textures, ppp)| Overlay {
-            primitives,
-            textures,
-            pixels_per_point: *ppp,
-        });
+        let overlay = overlay.as_ref().map(|(primitives, textures, ppp)| OverlayFrame::new(primitives, textures, *ppp));
+        let overlay = overlay.as_ref().map(OverlayFrame::overlay);
         let presenter = &mut self.presenter;
         let drawn =
             self.swapchain.draw(|rec, target| presenter.record(rec, target, shown, overlay, screenshot.is_some()))?;

@@ -1,10 +1,10 @@
 //! `hybrid-rt bench ...`: benchmarks. `bench rays` measures both ray backends on the same rays;
 //! `bench sweep` measures frame time against error over configurations of the hybrid frame.
 
-use super::{GpuArgs, finish_validation, load_scene, parse_size};
+use super::{GpuArgs, load_scene, parse_size};
 use crate::backend::{Backend, BackendChoice};
 use crate::bench::{self, rays, sweep};
-use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
 use crate::render::CameraChoice;
 use crate::scene::LoadOptions;
@@ -103,7 +103,7 @@ fn run_rays(a: &RaysArgs) -> Result<()> {
     };
     let opts = rays::Options { width, height, incoherent: a.incoherent, repeats: a.repeats };
     let shaders = ShaderLibrary::embedded();
-    let bar = super::progress_bar(scenes.len() as u64, "scenes");
+    let bar = crate::progress::progress_bar(scenes.len() as u64, "scenes");
     let mut results = Vec::new();
     for s in &scenes {
         bar.set_message(s.clone());

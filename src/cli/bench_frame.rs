@@ -1,10 +1,10 @@
 //! `hybrid-rt bench frame`: where the default frame's time goes, pass by pass, at the sizes
 //! asked for (src/bench/frame.rs).
 
-use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
+use super::{GpuArgs, SceneArgs, parse_size};
 use crate::backend;
 use crate::bench::{self, frame};
-use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
 use anyhow::Result;
 use clap::Args;
@@ -45,7 +45,7 @@ pub fn run(a: &FrameArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     let shaders = ShaderLibrary::embedded();
-    let bar = super::progress_bar(sizes.len() as u64, "sizes");
+    let bar = crate::progress::progress_bar(sizes.len() as u64, "sizes");
     let mut costs = Vec::new();
     for &size in &sizes {
         bar.set_message(format!("{}x{}", size.0, size.1));

@@ -2,7 +2,7 @@
 
 use super::GpuArgs;
 use crate::backend;
-use crate::gpu::{Context, ContextOptions};
+use crate::gpu::{Context, ContextOptions, finish_validation};
 use anyhow::Result;
 use clap::Args;
 
@@ -34,5 +34,5 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         println!("timestamps:               {}", if caps.timestamp_period_ns > 0.0 { "yes" } else { "no" });
         println!("ray backend:              {} ({why})", picked.variant());
     }
-    super::finish_validation(ctx)
+    finish_validation(ctx)
 }

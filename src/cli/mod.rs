@@ -235,31 +235,3 @@ fn run(cli: Cli) -> ExitCode {
         }
     }
 }
-
-/// Drops the context (tearing down the device, which is when leaks are reported), then fails
-/// when the validation layer printed anything.
-pub fn finish_validation(ctx: std::sync::Arc<crate::gpu::Context>) -> Result<()> {
-    let log = ctx.validation.clone();
-    drop(ctx);
-    let n = log.count();
-    if n > 0 {
-        bail!("the Vulkan validation layer reported {n} message(s) (see above)");
-    }
-    Ok(())
-}
-
-/// A progress bar on stderr for long work; hidden when stderr is not a terminal or the work
-/// is a single step.
-pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if len <= 1 || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len);
-    let style = indicatif::ProgressStyle::with_template(&format!(
-        "{{bar:40}} {{pos}}/{{len}} {what} [{{elapsed_precise}} elapsed, {{eta}} left] {{msg}}"
-    ))
-    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
-    bar.set_style(style);
-    bar
-}

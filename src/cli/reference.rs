@@ -2,9 +2,9 @@
 //! (the `pathtrace` pass), one sample per pixel per submission so that no single GPU call runs
 //! long on a slow device, and writes the mean as linear EXR.
 
-use super::{EnvironmentArgs, GpuArgs, SceneArgs, finish_validation, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::backend;
-use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io::{self, Texels};
 use crate::passes::pathtrace;
 use crate::render::{CameraChoice, RenderMode, Renderer, Settings};
@@ -83,7 +83,7 @@ pub fn run(a: &ReferenceArgs) -> Result<()> {
     let camera = a.camera.clone().unwrap_or_default();
     let mut renderer = Renderer::new(&ctx, &ShaderLibrary::embedded(), scene, settings, &camera, picked)?;
 
-    let bar = crate::cli::progress_bar(a.spp as u64, "spp");
+    let bar = crate::progress::progress_bar(a.spp as u64, "spp");
     let start = Instant::now();
     let mut last_report = (start, 0u64);
     let mut rays = 0u64;

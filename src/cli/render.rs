@@ -1,11 +1,11 @@
 //! `hybrid-rt render`: renders N frames of a scene and writes the last one; optionally dumps
 //! every pass's outputs.
 
-use super::{EnvironmentArgs, GpuArgs, SceneArgs, finish_validation, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::backend;
 use crate::bench;
 use crate::capture::Capture;
-use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
 use crate::render::{self, CameraChoice, Renderer, Settings};
 use anyhow::{Result, bail};
@@ -137,7 +137,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         Some(dir) => Some(Capture::new(dir, !a.dump_frames.is_empty(), a.force, &scene_name, &ctx.caps.device_name)?),
         None => None,
     };
-    let bar = crate::cli::progress_bar(a.frames as u64, "frames");
+    let bar = crate::progress::progress_bar(a.frames as u64, "frames");
     for n in 1..=a.frames {
         renderer.render_frame()?;
         let dump_now = if a.dump_frames.is_empty() { n == a.frames } else { a.dump_frames.contains(&n) };

@@ -1,10 +1,10 @@
 //! `hybrid-rt bench soak`: many frames of an animated scene, watching host and device memory
 //! and frame times (src/bench/soak.rs).
 
-use super::{GpuArgs, SceneArgs, finish_validation, parse_size};
+use super::{GpuArgs, SceneArgs, parse_size};
 use crate::backend;
 use crate::bench::{self, soak};
-use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
 use crate::render::{CameraChoice, Renderer, Settings};
 use anyhow::Result;
@@ -51,7 +51,7 @@ pub fn run(a: &SoakArgs) -> Result<()> {
     let settings = Settings { width, height, taa: true, ..Default::default() };
     let shaders = ShaderLibrary::embedded();
     let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &CameraChoice::Default, picked)?;
-    let bar = super::progress_bar(a.frames as u64, "frames");
+    let bar = crate::progress::progress_bar(a.frames as u64, "frames");
     let result = soak::run(&mut renderer, &opts, &|n| bar.set_position(n as u64))?;
     bar.finish_and_clear();
     drop(renderer);

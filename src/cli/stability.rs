@@ -1,10 +1,10 @@
 //! `hybrid-rt bench stability`: the stability suite's scenarios, denoised and raw, as a table
 //! and JSON (src/bench/stability.rs).
 
-use super::{GpuArgs, finish_validation, parse_size};
+use super::{GpuArgs, parse_size};
 use crate::backend;
 use crate::bench::{self, stability};
-use crate::gpu::{Context, ContextOptions, ShaderLibrary};
+use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
 use anyhow::Result;
 use clap::Args;
@@ -34,7 +34,7 @@ pub fn run(a: &StabilityArgs) -> Result<()> {
     log::info!("ray backend: {} ({why})", picked.variant());
     let shaders = ShaderLibrary::embedded();
     let rig = stability::Rig { ctx: &ctx, shaders: &shaders, backend: picked, width, height };
-    let bar = super::progress_bar(stability::SCENARIOS.len() as u64, "scenarios");
+    let bar = crate::progress::progress_bar(stability::SCENARIOS.len() as u64, "scenarios");
     let start = std::time::Instant::now();
     let rows = stability::run_all(&rig, &|name: &str| {
         bar.set_message(name.to_string());

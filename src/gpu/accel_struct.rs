@@ -26,8 +26,13 @@ impl AccelStruct {
             MemoryLocation::GpuOnly,
         )?;
         let info = vk::AccelerationStructureCreateInfoKHR::default().buffer(buffer.raw).size(size).ty(ty);
+        // SAFETY: `buffer` was just made with ACCELERATION_STRUCTURE_STORAGE usage, bound to
+        // memory, and holds `size` bytes at offset 0 (offset 0 meets the 256-byte alignment
+        // rule); it is kept in `self` for as long as the structure lives.
         let raw = unsafe { loader.create_acceleration_structure(&info, None) }
             .with_context(|| format!("create acceleration structure {name}"))?;
+        // SAFETY: `raw` was just made; the loader exists only with ray query enabled, which
+        // includes the accelerationStructure feature this query needs.
         let address = unsafe {
             loader.get_acceleration_structure_device_address(
                 &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
@@ -41,6 +46,8 @@ impl AccelStruct {
 impl Drop for AccelStruct {
     fn drop(&mut self) {
         if let Some(loader) = &self.ctx.accel {
+            // SAFETY: made by `new`, destroyed once, before its buffer (a field dropped after
+            // this). Structures are dropped after the frames tracing them were waited for.
             unsafe { loader.destroy_acceleration_structure(self.raw, None) };
         }
     }
@@ -107,6 +114,8 @@ pub struct BlasBuildStats {
 fn scratch_alignment(ctx: &Context) -> u64 {
     let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
     let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut as_props);
+    // SAFETY: the context's own physical device; the chained struct (an extension the device
+    // has: this is called only with the acceleration-structure loader present) lives here.
     unsafe { ctx.instance.get_physical_device_properties2(ctx.physical_device, &mut props) };
     u64::from(as_props.min_acceleration_structure_scratch_offset_alignment).max(1)
 }
@@ -185,6 +194,12 @@ pub fn build_blases(
         let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> =
             geometries.iter().map(|g| [g.range()]).collect();
         let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> = ranges.iter().map(|r| &r[..]).collect();
+        // SAFETY: `cmd` is recording (CommandPool::run). Each info has one geometry and one
+        // range (`infos`, `geoms`, `ranges` index alike and outlive the call); each destination
+        // was made above with the size this geometry's size query asked for; each build gets
+        // its own aligned scratch region of the size queried, so no two builds overlap. The
+        // vertex and index addresses are the scene's geometry buffers, which the caller keeps
+        // alive (they outlive the structures), and `run` waits for the builds.
         unsafe { loader.cmd_build_acceleration_structures(cmd, &infos, &range_refs) };
         super::memory_barrier(
             ctx,
@@ -200,6 +215,9 @@ pub fn build_blases(
         );
         if let Some(qp) = &query_pool {
             let handles: Vec<_> = compactable.iter().map(|&i| structs[i].raw).collect();
+            // SAFETY: recording; the pool holds exactly `handles.len()` compacted-size queries,
+            // reset here before they are written; the structures were built with
+            // ALLOW_COMPACTION and the barrier above orders their builds before the query.
             unsafe {
                 ctx.device.cmd_reset_query_pool(cmd, qp.raw, 0, handles.len() as u32);
                 loader.cmd_write_acceleration_structures_properties(
@@ -218,6 +236,8 @@ pub fn build_blases(
         return Ok((structs, BlasBuildStats { built_bytes, final_bytes: built_bytes, compacted: false }));
     };
     let mut sizes = vec![0u64; compactable.len()];
+    // SAFETY: the submission that wrote these queries has finished (`run` waited); `sizes`
+    // holds one u64 per query (TYPE_64), and WAIT makes every result available.
     unsafe {
         ctx.device.get_query_pool_results(
             qp.raw,
@@ -243,6 +263,9 @@ pub fn build_blases(
                 .src(structs[i].raw)
                 .dst(compacted[k].raw)
                 .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
+            // SAFETY: recording; the source was built with ALLOW_COMPACTION and finished (the
+            // previous `run` waited), the destination was made with at least the compacted size
+            // the device reported (or the full size), and both live until `run` returns.
             unsafe { loader.cmd_copy_acceleration_structure(cmd, &info) };
         }
         super::memory_barrier(
@@ -363,6 +386,11 @@ impl BlasRefitter {
                 vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
             ),
         );
+        // SAFETY: recording (`rec`). Each structure was built with ALLOW_UPDATE from the same
+        // geometry description (topology and counts unchanged; only vertices move), as UPDATE
+        // requires; each uses its own scratch region, sized for the larger of build and update
+        // scratch; the barrier above orders this after earlier reads and builds. The caller
+        // keeps structures and geometry buffers alive until the frame's fence wait.
         unsafe { loader.cmd_build_acceleration_structures(rec.cmd, &infos, &range_refs) };
         Ok(())
     }
@@ -375,6 +403,8 @@ struct QueryPool {
 
 impl Drop for QueryPool {
     fn drop(&mut self) {
+        // SAFETY: made by compaction_query_pool, destroyed once, after the results were read
+        // (the submissions using it were waited for).
         unsafe { self.ctx.device.destroy_query_pool(self.raw, None) };
     }
 }
@@ -385,6 +415,7 @@ fn compaction_query_pool(ctx: &Arc<Context>, count: u32) -> Option<QueryPool> {
     let info = vk::QueryPoolCreateInfo::default()
         .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
         .query_count(count);
+    // SAFETY: creation on a live device from an info on this stack frame.
     match unsafe { ctx.device.create_query_pool(&info, None) } {
         Ok(raw) => Some(QueryPool { ctx: ctx.clone(), raw }),
         Err(e) => {
@@ -412,6 +443,8 @@ pub struct Tlas {
     _scratch: Buffer,
     scratch_address: vk::DeviceAddress,
     count: u32,
+    /// Instances were written: a build before that would read uninitialised memory.
+    written: bool,
 }
 
 impl Tlas {
@@ -439,7 +472,7 @@ impl Tlas {
             sizes.acceleration_structure_size,
         )?;
         let (scratch, scratch_address) = scratch_buffer(ctx, "tlas scratch", sizes.build_scratch_size)?;
-        Ok(Self { accel, instances, _scratch: scratch, scratch_address, count })
+        Ok(Self { accel, instances, _scratch: scratch, scratch_address, count, written: false })
     }
 
     fn geometry(address: vk::DeviceAddress) -> vk::AccelerationStructureGeometryKHR<'static> {
@@ -481,13 +514,18 @@ impl Tlas {
                 raw.len() * size_of::<vk::AccelerationStructureInstanceKHR>(),
             )
         };
-        self.instances.write(0, bytes)
+        self.instances.write(0, bytes)?;
+        self.written = true;
+        Ok(())
     }
 
     /// Records a full rebuild from the written instances, then a barrier that makes the TLAS
     /// visible to ray queries in compute shaders.
     pub fn record_build(&self, rec: &Recorder) -> Result<()> {
         let loader = accel_loader(rec.ctx)?;
+        if !self.written {
+            return Err(anyhow!("TLAS built before its instances were written"));
+        }
         let geom = [Self::geometry(self.instances.address)];
         let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
@@ -513,6 +551,12 @@ impl Tlas {
                 vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
             ),
         );
+        // SAFETY: recording; the destination and scratch were sized for `count` instances
+        // (the size query in `new`), and the instance buffer holds exactly `count` written
+        // instances (write_instances checks, `written` above). Their BLAS addresses are the
+        // caller's (`TlasInstance::blas_address`: the hardware backend passes its own live
+        // BLASes, which it keeps for as long as the TLAS). The barrier above orders the
+        // rebuild after the last frame's traces and the BLAS builds.
         unsafe { loader.cmd_build_acceleration_structures(rec.cmd, &[info], &[&range]) };
         rec.memory_barrier(
             (
@@ -543,6 +587,8 @@ fn build_sizes(
         .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
         .geometries(std::slice::from_ref(geometry));
     let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    // SAFETY: a size query (no device memory is read); `info` has one geometry and one count,
+    // and `sizes` is written by the call.
     unsafe {
         loader.get_acceleration_structure_build_sizes(
             vk::AccelerationStructureBuildTypeKHR::DEVICE,

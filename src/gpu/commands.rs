@@ -4,12 +4,17 @@
 use super::Context;
 use anyhow::{Context as _, Result};
 use ash::vk;
+use std::cell::Cell;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 pub struct CommandPool {
     ctx: Arc<Context>,
     pool: vk::CommandPool,
     fence: vk::Fence,
+    /// Not Sync: Vulkan requires the pool and fence to be used from one thread at a time,
+    /// and `run` takes `&self`.
+    _one_thread: PhantomData<Cell<()>>,
 }
 
 impl CommandPool {
@@ -17,15 +22,19 @@ impl CommandPool {
         let info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT | vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: creation on a live device from infos on this stack frame; the queue family
+        // is the context's own.
         let pool = unsafe { ctx.device.create_command_pool(&info, None) }.context("create command pool")?;
+        // SAFETY: as above.
         let fence = match unsafe { ctx.device.create_fence(&vk::FenceCreateInfo::default(), None) } {
             Ok(f) => f,
             Err(e) => {
+                // SAFETY: the pool was made above and has no command buffers yet.
                 unsafe { ctx.device.destroy_command_pool(pool, None) };
                 return Err(e).context("create fence");
             }
         };
-        Ok(Self { ctx: ctx.clone(), pool, fence })
+        Ok(Self { ctx: ctx.clone(), pool, fence, _one_thread: PhantomData })
     }
 
     /// Records commands with `f`, submits them and waits for completion.
@@ -35,8 +44,13 @@ impl CommandPool {
             .command_pool(self.pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: `self.pool` is live, and used by one thread at a time (CommandPool is not
+        // Sync); a nested `run` on the same thread finishes before this one continues.
         let cmd = unsafe { d.allocate_command_buffers(&info) }.context("allocate command buffer")?[0];
+        // Set between a submission and the end of its wait: `cmd` may still be executing.
+        let mut pending = false;
         let result = (|| {
+            // SAFETY: `cmd` was just allocated (initial state).
             unsafe {
                 d.begin_command_buffer(
                     cmd,
@@ -44,19 +58,31 @@ impl CommandPool {
                 )
             }?;
             let r = f(cmd)?;
+            // SAFETY: `cmd` is recording (begun above; `f` records into it but never ends it).
             unsafe { d.end_command_buffer(cmd) }.map_err(|e| device_error("vkEndCommandBuffer", e))?;
             let cmds = [cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            // SAFETY: the fence is unsignalled or signalled by a finished submission (each run
+            // waits for its own before returning), so it may be reset; `cmd` is executable and
+            // submitted once, to the context's queue. The wait keeps `cmd` and everything `f`
+            // borrowed alive until the GPU is done.
             unsafe {
                 d.reset_fences(&[self.fence]).map_err(|e| device_error("vkResetFences", e))?;
                 d.queue_submit(self.ctx.queue, &[submit], self.fence).map_err(|e| device_error("vkQueueSubmit", e))?;
+                pending = true;
                 // A generous timeout: lavapipe is slow, but a GPU hang must not hang the program.
                 d.wait_for_fences(&[self.fence], true, 600_000_000_000)
                     .map_err(|e| device_error("vkWaitForFences", e))?;
             }
+            pending = false;
             Ok(r)
         })();
-        unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        if !pending {
+            // SAFETY: `cmd` came from this pool and is not pending: never submitted, or its
+            // fence was waited for. (After a failed wait it is left to the pool, which Drop
+            // destroys after the queue is idle.)
+            unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        }
         result
     }
 }
@@ -82,6 +108,8 @@ pub(super) fn device_error(call: &str, e: vk::Result) -> anyhow::Error {
 
 impl Drop for CommandPool {
     fn drop(&mut self) {
+        // SAFETY: after the queue is idle nothing this pool allocated is pending; the fence and
+        // pool were made by `new` and are destroyed once, here (their buffers go with the pool).
         unsafe {
             let _ = self.ctx.device.queue_wait_idle(self.ctx.queue);
             self.ctx.device.destroy_fence(self.fence, None);
@@ -91,7 +119,7 @@ impl Drop for CommandPool {
 }
 
 /// A global memory barrier between two stage/access scopes (synchronization2).
-pub fn memory_barrier(
+pub(super) fn memory_barrier(
     ctx: &Context,
     cmd: vk::CommandBuffer,
     src: (vk::PipelineStageFlags2, vk::AccessFlags2),
@@ -108,7 +136,7 @@ pub fn memory_barrier(
 
 /// An image barrier with a layout transition.
 #[allow(clippy::too_many_arguments)]
-pub fn image_barrier(
+pub(super) fn image_barrier(
     ctx: &Context,
     cmd: vk::CommandBuffer,
     image: vk::Image,

@@ -168,6 +168,8 @@ pub struct Context {
 
 impl Context {
     pub fn new(opts: &ContextOptions) -> Result<Arc<Self>> {
+        // SAFETY: loading libvulkan runs its initialisers; the loader is the system's Vulkan
+        // loader, loaded once per context and kept in `entry` for as long as the context lives.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             anyhow!("cannot load the Vulkan loader (libvulkan.so.1): {e}; run tools/setup.sh or install libvulkan1")
         })?;
@@ -181,6 +183,8 @@ impl Context {
         let parts = match open_device(&instance, opts, api_version) {
             Ok(p) => p,
             Err(e) => {
+                // SAFETY: the instance and messenger were made just above and nothing else
+                // holds them (open_device destroyed what it made); messenger before instance.
                 unsafe {
                     if let Some((loader, messenger)) = debug_utils {
                         loader.destroy_debug_utils_messenger(messenger, None);
@@ -191,6 +195,7 @@ impl Context {
             }
         };
         let DeviceParts { physical_device, queue_family, device, caps, allocator } = parts;
+        // SAFETY: the device was created with one queue of `queue_family` (create_device).
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let accel =
             caps.supports_ray_query().then(|| ash::khr::acceleration_structure::Device::new(&instance, &device));
@@ -221,11 +226,17 @@ impl Context {
             let name = CString::new(name).unwrap_or_default();
             let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
             // Naming is a debugging aid; failure to name is not an error worth surfacing.
+            // SAFETY: `handle` is an object of this device (every caller names what it just
+            // made); `info` and the name string live across the call.
             let _ = unsafe { d.set_debug_utils_object_name(&info) };
         }
     }
 
     pub(super) fn cmd_pipeline_barrier2(&self, cmd: vk::CommandBuffer, dep: &vk::DependencyInfo) {
+        // SAFETY: `cmd` is a command buffer of this device in the recording state (callers pass
+        // a `Recorder`'s or a `CommandPool::run` buffer). The core entry point is used only
+        // when device and instance are 1.3 with synchronization2 enabled, else the KHR one,
+        // whose extension create_device enabled.
         unsafe {
             if self.caps.core_1_3 {
                 self.device.cmd_pipeline_barrier2(cmd, dep)
@@ -237,6 +248,8 @@ impl Context {
 
     pub(super) fn cmd_write_timestamp2(&self, cmd: vk::CommandBuffer, pool: vk::QueryPool, index: u32) {
         let stage = vk::PipelineStageFlags2::ALL_COMMANDS;
+        // SAFETY: `cmd` is recording (as above); `pool` is a live timestamp pool of this
+        // device and `index` is below its capacity (asserted by TimestampPool::write).
         unsafe {
             if self.caps.core_1_3 {
                 self.device.cmd_write_timestamp2(cmd, stage, pool, index)
@@ -247,6 +260,8 @@ impl Context {
     }
 
     pub(super) fn cmd_begin_rendering(&self, cmd: vk::CommandBuffer, info: &vk::RenderingInfo) {
+        // SAFETY: `cmd` is recording and outside a render pass instance; the attachments in
+        // `info` are views of live images owned by the caller. Core or KHR entry as above.
         unsafe {
             if self.caps.core_1_3 {
                 self.device.cmd_begin_rendering(cmd, info)
@@ -257,6 +272,8 @@ impl Context {
     }
 
     pub(super) fn cmd_end_rendering(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: `cmd` is recording inside the rendering begun by cmd_begin_rendering (every
+        // caller pairs the two in one function).
         unsafe {
             if self.caps.core_1_3 {
                 self.device.cmd_end_rendering(cmd)
@@ -267,12 +284,18 @@ impl Context {
     }
 
     pub fn wait_idle(&self) -> Result<()> {
+        // SAFETY: the device is live for `&self`; waiting needs no other handle. The queue is
+        // only submitted to from the thread that owns the frame, which is this one.
         unsafe { self.device.device_wait_idle() }.map_err(|e| super::commands::device_error("vkDeviceWaitIdle", e))
     }
 }
 
 impl Drop for Context {
     fn drop(&mut self) {
+        // SAFETY: the last `Arc<Context>` is gone, so every object made from this device has
+        // been dropped (each holds an Arc) and nothing can use it again. After the wait the
+        // device is idle; the allocator (its memory blocks) goes before the device, the device
+        // and the messenger before the instance. `allocator` is never touched after this.
         unsafe {
             let _ = self.device.device_wait_idle();
             // The allocator frees its memory blocks, which needs the device alive.
@@ -327,6 +350,7 @@ fn open_device(instance: &ash::Instance, opts: &ContextOptions, instance_api: u3
     match allocator {
         Ok(allocator) => Ok(DeviceParts { physical_device, queue_family, device, caps, allocator }),
         Err(e) => {
+            // SAFETY: the device was created above and nothing was made from it yet.
             unsafe { device.destroy_device(None) };
             bail!("gpu-allocator: {e}")
         }
@@ -340,6 +364,7 @@ fn create_instance(
 ) -> Result<(ash::Instance, DebugUtils, u32)> {
     let validate = opts.validate;
     let required = required_version()?;
+    // SAFETY: a global query on a loaded entry; no handles involved.
     let loader_version = unsafe { entry.try_enumerate_instance_version() }?.unwrap_or(vk::API_VERSION_1_0);
     if loader_version < required {
         bail!(
@@ -352,6 +377,7 @@ fn create_instance(
     let app_name = c"hybrid-rt";
     let app = vk::ApplicationInfo::default().application_name(app_name).engine_name(app_name).api_version(api_version);
 
+    // SAFETY: a global query on a loaded entry (no layer name: the implicit set).
     let available_exts = unsafe { entry.enumerate_instance_extension_properties(None) }?;
     let has_ext = |name: &CStr| available_exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
     let mut ext_ptrs: Vec<*const c_char> = Vec::new();
@@ -366,6 +392,7 @@ fn create_instance(
         ext_ptrs.extend_from_slice(surface_exts);
     }
     if validate {
+        // SAFETY: a global query on a loaded entry.
         let layers = unsafe { entry.enumerate_instance_layer_properties() }?;
         if !layers.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
             bail!(
@@ -390,6 +417,11 @@ fn create_instance(
         // Chained at creation too, so messages from vkCreateInstance/vkDestroyInstance are caught.
         info = info.push_next(&mut features).push_next(&mut messenger_info);
     }
+    // SAFETY: `info` and everything it points at (names, extension and layer name pointers
+    // into 'static C strings, the chained validation features and messenger info) live on
+    // this stack frame across the call; only extensions and layers found above are named.
+    // The messenger's user data is `log`, which the caller keeps alive (in the Context)
+    // until after the instance is destroyed.
     let instance = match unsafe { entry.create_instance(&info, None) } {
         Ok(i) => i,
         // What the loader answers when it finds no driver (ICD) at all.
@@ -398,10 +430,14 @@ fn create_instance(
     };
     let debug_utils = if validate {
         let loader = ash::ext::debug_utils::Instance::new(entry, &instance);
+        // SAFETY: the instance was made with VK_EXT_debug_utils (checked above); the callback
+        // reads `log` through its user-data pointer, and the Context keeps that Arc alive
+        // until after it destroys the messenger.
         let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_create_info(log), None) };
         match messenger {
             Ok(m) => Some((loader, m)),
             Err(e) => {
+                // SAFETY: made above, nothing made from it yet.
                 unsafe { instance.destroy_instance(None) };
                 bail!("vkCreateDebugUtilsMessengerEXT: {e}");
             }
@@ -441,11 +477,14 @@ fn no_driver_hint() -> String {
 
 fn pick_physical_device(instance: &ash::Instance) -> Result<(vk::PhysicalDevice, u32)> {
     let required = required_version()?;
+    // SAFETY: physical-device queries on a live instance; the physical devices they return
+    // belong to it and need no destruction (as for every query below).
     let devices = unsafe { instance.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices")?;
     if devices.is_empty() {
         bail!("no Vulkan device found: {}", no_driver_hint());
     }
     let score = |pd: vk::PhysicalDevice| {
+        // SAFETY: `pd` is one of this instance's physical devices.
         let props = unsafe { instance.get_physical_device_properties(pd) };
         match props.device_type {
             vk::PhysicalDeviceType::DISCRETE_GPU => 3,
@@ -457,6 +496,7 @@ fn pick_physical_device(instance: &ash::Instance) -> Result<(vk::PhysicalDevice,
     let mut best: Option<(i32, vk::PhysicalDevice, u32)> = None;
     let mut rejected = Vec::new();
     for pd in devices {
+        // SAFETY: `pd` is one of this instance's physical devices.
         let props = unsafe { instance.get_physical_device_properties(pd) };
         let name = props.device_name_as_c_str().unwrap_or(c"?").to_string_lossy().into_owned();
         if props.api_version < required {
@@ -467,6 +507,7 @@ fn pick_physical_device(instance: &ash::Instance) -> Result<(vk::PhysicalDevice,
             ));
             continue;
         }
+        // SAFETY: as above.
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let Some(family) =
             families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
@@ -489,7 +530,9 @@ fn probe(
     hidden: Hidden,
     instance_api: u32,
 ) -> (Extensions, Capabilities) {
+    // SAFETY: `pd` is one of this instance's physical devices (pick_physical_device).
     let props = unsafe { instance.get_physical_device_properties(pd) };
+    // SAFETY: as above.
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let has = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
     // Core 1.3 commands need both the device and the instance at 1.3.
@@ -512,13 +555,18 @@ fn probe(
         if has_rq {
             f2 = f2.push_next(&mut frq);
         }
+        // SAFETY: the chain holds only structs the device reports (1.3 features when it is
+        // 1.3, extension features when the extension is present), all alive in this scope.
         unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     }
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     {
         let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: driver properties are core 1.2, which the device reaches (checked when it
+        // was picked); the chained struct lives in this scope.
         unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
     }
+    // SAFETY: as above; `queue_family` indexes this list (found in it by pick_physical_device).
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let ts_bits = families[queue_family as usize].timestamp_valid_bits;
 
@@ -592,6 +640,7 @@ fn create_device(
     }
     let priorities = [1.0f32];
     let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+    // SAFETY: `pd` is one of this instance's physical devices.
     let supported = unsafe { instance.get_physical_device_features(pd) };
     let core = vk::PhysicalDeviceFeatures::default()
         .shader_int64(supported.shader_int64 == vk::TRUE)
@@ -621,5 +670,10 @@ fn create_device(
     }
     let info =
         vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&names).push_next(&mut f2);
+    // SAFETY: `info` and its chain live on this stack frame, and the chain holds one struct
+    // of each type (the 1.3 struct or the two KHR ones, never both). Every extension named
+    // was found on the device by `probe`; a feature the device lacks makes the call return
+    // VK_ERROR_FEATURE_NOT_PRESENT (the spec's defined answer), not misbehave. One queue, of
+    // a family the device has.
     unsafe { instance.create_device(pd, &info, None) }.context("vkCreateDevice")
 }

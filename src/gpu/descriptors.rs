@@ -56,6 +56,8 @@ impl DescriptorSetLayout {
             .collect();
         let flags = if push { vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR } else { Default::default() };
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&vk_bindings).flags(flags);
+        // SAFETY: creation on a live device; `info` points into `vk_bindings`, alive across the
+        // call. Push-descriptor layouts need VK_KHR_push_descriptor, which the context requires.
         let raw = unsafe { ctx.device.create_descriptor_set_layout(&info, None) }.context("create set layout")?;
         Ok(Self { ctx: ctx.clone(), raw, bindings: bindings.to_vec() })
     }
@@ -63,6 +65,8 @@ impl DescriptorSetLayout {
 
 impl Drop for DescriptorSetLayout {
     fn drop(&mut self) {
+        // SAFETY: made by `new`, destroyed once. Pipeline layouts made from it keep working
+        // (the spec allows destroying a set layout once layouts and sets are made from it).
         unsafe { self.ctx.device.destroy_descriptor_set_layout(self.raw, None) };
     }
 }
@@ -83,12 +87,16 @@ impl DescriptorSet {
             .map(|b| vk::DescriptorPoolSize { ty: b.kind.vk(), descriptor_count: b.count.max(1) })
             .collect();
         let info = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
+        // SAFETY: creation on a live device from infos on this stack frame.
         let pool = unsafe { ctx.device.create_descriptor_pool(&info, None) }.context("create descriptor pool")?;
         let layouts = [layout.raw];
         let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+        // SAFETY: one set from a pool made for exactly this layout's bindings (max_sets 1);
+        // the layout is borrowed, so live. The pool is used by this object only.
         match unsafe { ctx.device.allocate_descriptor_sets(&alloc) } {
             Ok(sets) => Ok(Self { ctx: ctx.clone(), pool, raw: sets[0] }),
             Err(e) => {
+                // SAFETY: made above, nothing allocated from it.
                 unsafe { ctx.device.destroy_descriptor_pool(pool, None) };
                 Err(e).context("allocate descriptor set")
             }
@@ -102,6 +110,8 @@ impl DescriptorSet {
             .dst_binding(binding)
             .descriptor_type(kind.vk())
             .buffer_info(&infos)];
+        // SAFETY: the set is live (owned) and the buffer borrowed. Sets are written while the
+        // scene is uploaded, before any command buffer uses them, so none is pending.
         unsafe { self.ctx.device.update_descriptor_sets(&w, &[]) };
     }
 
@@ -122,6 +132,9 @@ impl DescriptorSet {
             .dst_binding(binding)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&infos)];
+        // SAFETY: as write_buffer; the views and samplers are the scene's textures, which live
+        // as long as the scene upload that owns this set, and are in SHADER_READ_ONLY_OPTIMAL
+        // (upload::texture leaves them so).
         unsafe { self.ctx.device.update_descriptor_sets(&w, &[]) };
     }
 
@@ -135,12 +148,16 @@ impl DescriptorSet {
             .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
             .push_next(&mut as_info);
         w.descriptor_count = 1;
+        // SAFETY: as write_buffer; `as_info` (chained) and `handles` live across the call, the
+        // count matches the one handle, and the handle is the scene's TLAS, owned alongside.
         unsafe { self.ctx.device.update_descriptor_sets(&[w], &[]) };
     }
 }
 
 impl Drop for DescriptorSet {
     fn drop(&mut self) {
+        // SAFETY: made by `new`, destroyed once (its set with it); the scene is dropped only
+        // after its last frame has been waited for, so no command buffer still uses the set.
         unsafe { self.ctx.device.destroy_descriptor_pool(self.pool, None) };
     }
 }

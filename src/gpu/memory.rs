@@ -74,8 +74,14 @@ impl Buffer {
         location: MemoryLocation,
     ) -> Result<Self> {
         let size = size.max(4);
+        // create_device enables bufferDeviceAddress for the ray-query backend only.
+        if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) && !ctx.caps.supports_ray_query() {
+            return Err(anyhow!("buffer {name}: device addresses are enabled only where ray query is"));
+        }
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: creation on a live device from an info on this stack frame (size >= 4).
         let raw = unsafe { ctx.device.create_buffer(&info, None) }.with_context(|| format!("create buffer {name}"))?;
+        // SAFETY: `raw` was just made on this device.
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
         let desc = AllocationCreateDesc {
             name,
@@ -87,12 +93,18 @@ impl Buffer {
         let allocation = match allocate(ctx, || format!("buffer {name} ({size} bytes)"), &desc) {
             Ok(a) => a,
             Err(e) => {
+                // SAFETY: made above, never bound or used.
                 unsafe { ctx.device.destroy_buffer(raw, None) };
                 return Err(e);
             }
         };
+        // SAFETY: gpu-allocator returned memory and an offset that satisfy `requirements`
+        // (size, alignment, memory type) for this buffer, which has no memory bound yet.
         unsafe { ctx.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }?;
         let address = if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
+            // SAFETY: the buffer is bound to memory and was made with SHADER_DEVICE_ADDRESS,
+            // allowed above only where the context enabled bufferDeviceAddress (and the
+            // allocator then allocates with the device-address flag).
             unsafe { ctx.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) }
         } else {
             0
@@ -138,6 +150,9 @@ impl Drop for Buffer {
         {
             let _ = alloc.free(a);
         }
+        // SAFETY: made by `new`, destroyed once. Buffers are dropped after the frames using
+        // them were waited for (one frame in flight; the presenter keeps its staging buffers
+        // until the next frame), so no pending command buffer reads it.
         unsafe { self.ctx.device.destroy_buffer(self.raw, None) };
     }
 }
@@ -174,7 +189,9 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: creation on a live device from an info on this stack frame.
         let raw = unsafe { ctx.device.create_image(&info, None) }.with_context(|| format!("create image {name}"))?;
+        // SAFETY: `raw` was just made on this device.
         let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
         let desc = AllocationCreateDesc {
             name,
@@ -190,10 +207,12 @@ impl Image {
         let allocation = match allocate(ctx, what, &desc) {
             Ok(a) => a,
             Err(e) => {
+                // SAFETY: made above, never bound or used.
                 unsafe { ctx.device.destroy_image(raw, None) };
                 return Err(e);
             }
         };
+        // SAFETY: as for buffers: memory satisfying this image's requirements, none bound yet.
         unsafe { ctx.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }?;
         let aspect = aspect_of(format);
         let view_info = vk::ImageViewCreateInfo::default()
@@ -207,6 +226,8 @@ impl Image {
                 base_array_layer: 0,
                 layer_count: 1,
             });
+        // SAFETY: a view of the whole image (its mip levels, one layer, its format and aspect),
+        // which is bound to memory.
         let view = unsafe { ctx.device.create_image_view(&view_info, None) };
         let view = match view {
             Ok(v) => v,
@@ -214,6 +235,7 @@ impl Image {
                 if let Ok(mut alloc) = ctx.allocator.lock() {
                     let _ = alloc.free(allocation);
                 }
+                // SAFETY: made above, never used by any command.
                 unsafe { ctx.device.destroy_image(raw, None) };
                 return Err(anyhow!("create image view {name}: {e}"));
             }
@@ -236,12 +258,16 @@ impl Image {
 
 impl Drop for Image {
     fn drop(&mut self) {
+        // SAFETY: made by `new`, destroyed once, view before image; as for buffers, images are
+        // dropped only after the frames using them were waited for.
         unsafe { self.ctx.device.destroy_image_view(self.view, None) };
         if let Some(a) = self.allocation.take()
             && let Ok(mut alloc) = self.ctx.allocator.lock()
         {
             let _ = alloc.free(a);
         }
+        // SAFETY: as above; its memory was freed just before, which Vulkan allows while the
+        // image exists as long as the image is not used again.
         unsafe { self.ctx.device.destroy_image(self.raw, None) };
     }
 }

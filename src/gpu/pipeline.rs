@@ -17,6 +17,9 @@ pub struct Pipeline {
 
 fn shader_module(ctx: &Context, spirv: &[u32], name: &str) -> Result<vk::ShaderModule> {
     let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+    // SAFETY: `spirv` is a whole SPIR-V module as u32 words (the size ash passes is in bytes,
+    // a multiple of 4 by construction), compiled by shaderc at build time or start-up, which
+    // emits valid SPIR-V; the device is live.
     unsafe { ctx.device.create_shader_module(&info, None) }.with_context(|| format!("create shader module {name}"))
 }
 
@@ -35,6 +38,7 @@ fn pipeline_layout(
     if push_constant_size > 0 {
         info = info.push_constant_ranges(&ranges);
     }
+    // SAFETY: the set layouts are borrowed (live); `raw_sets` and `ranges` outlive the call.
     unsafe { ctx.device.create_pipeline_layout(&info, None) }.context("create pipeline layout")
 }
 
@@ -50,6 +54,7 @@ impl Pipeline {
         let module = match shader_module(ctx, spirv, name) {
             Ok(m) => m,
             Err(e) => {
+                // SAFETY: made above, used by nothing yet.
                 unsafe { ctx.device.destroy_pipeline_layout(layout, None) };
                 return Err(e);
             }
@@ -59,7 +64,10 @@ impl Pipeline {
             .module(module)
             .name(c"main");
         let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        // SAFETY: the module and layout were made above on this device; `info` (and the stage's
+        // entry-point name, a 'static C string) live across the call.
         let result = unsafe { ctx.device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+        // SAFETY: a module may be destroyed once pipelines are made from it; nothing else uses it.
         unsafe { ctx.device.destroy_shader_module(module, None) };
         match result {
             Ok(p) => {
@@ -74,6 +82,7 @@ impl Pipeline {
                 })
             }
             Err((_, e)) => {
+                // SAFETY: made above; no pipeline was made with it.
                 unsafe { ctx.device.destroy_pipeline_layout(layout, None) };
                 Err(anyhow!("create compute pipeline {name}: {e}"))
             }
@@ -90,6 +99,8 @@ impl Pipeline {
         let (vs, fs) = match (vs, fs) {
             (Ok(v), Ok(f)) => (v, f),
             (v, f) => {
+                // SAFETY: whichever of the two modules was made, and the layout, were made just
+                // above and are used by nothing.
                 unsafe {
                     if let Ok(v) = v {
                         ctx.device.destroy_shader_module(v, None);
@@ -144,7 +155,11 @@ impl Pipeline {
             .dynamic_state(&dynamic)
             .layout(layout)
             .push_next(&mut rendering);
+        // SAFETY: modules and layout made above on this device; every state struct, the
+        // colour formats and the rendering info (chained) live across the call. Dynamic
+        // rendering is enabled (required by the context), so no render pass is needed.
         let result = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+        // SAFETY: as for compute: modules may go once the pipeline is made (or failed).
         unsafe {
             ctx.device.destroy_shader_module(vs, None);
             ctx.device.destroy_shader_module(fs, None);
@@ -162,6 +177,7 @@ impl Pipeline {
                 })
             }
             Err((_, e)) => {
+                // SAFETY: made above; no pipeline was made with it.
                 unsafe { ctx.device.destroy_pipeline_layout(layout, None) };
                 Err(anyhow!("create graphics pipeline {}: {e}", desc.name))
             }
@@ -181,6 +197,9 @@ pub struct RasterDesc<'a> {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
+        // SAFETY: made by `compute`/`raster`, destroyed once. Pipelines are dropped between
+        // frames (hot reload swaps them after the frame's fence wait), so no pending command
+        // buffer uses them.
         unsafe {
             self.ctx.device.destroy_pipeline(self.raw, None);
             self.ctx.device.destroy_pipeline_layout(self.layout, None);

@@ -10,15 +10,24 @@ pub struct Recorder<'a> {
 }
 
 impl<'a> Recorder<'a> {
+    /// `cmd` must be a command buffer of `ctx`'s device in the recording state, as handed
+    /// out by `CommandPool::run` or `Swapchain::draw`, and stay so while this lives (the
+    /// safety of every method rests on it; see the module header of gpu).
     pub fn new(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
         Self { ctx, cmd }
     }
 
     pub fn bind_pipeline(&self, p: &Pipeline) {
+        // SAFETY: `self.cmd` is recording (see `Recorder::new`); the pipeline is borrowed, so
+        // it is live for the call, and the frame's fence wait keeps owners alive until the GPU
+        // is done (the renderer drops pipelines only between frames).
         unsafe { self.ctx.device.cmd_bind_pipeline(self.cmd, p.bind_point, p.raw) };
     }
 
     pub fn bind_scene_set(&self, p: &Pipeline, set: vk::DescriptorSet) {
+        // SAFETY: recording; `set` is the scene's DescriptorSet (the only set 0 the renderer
+        // makes), alive as long as the scene upload that binds it, and it matches set 0 of
+        // every pipeline layout made from the scene set layout.
         unsafe { self.ctx.device.cmd_bind_descriptor_sets(self.cmd, p.bind_point, p.layout, 0, &[set], &[]) };
     }
 
@@ -71,23 +80,33 @@ impl<'a> Recorder<'a> {
                 }
             })
             .collect();
+        // SAFETY: recording; `writes` points into `image_infos`/`buffer_infos`, which outlive the
+        // call and are not grown after the pointers are taken (sized up front). Set 1 of every
+        // pipeline layout is a push-descriptor layout (DescriptorSetLayout::new with `push`);
+        // the views and buffers are of live images and buffers the frame graph owns.
         unsafe { self.ctx.push_descriptor.cmd_push_descriptor_set(self.cmd, p.bind_point, p.layout, 1, &writes) };
     }
 
     pub fn push_constants(&self, p: &Pipeline, data: &[u8]) {
         debug_assert!(data.len() as u32 <= p.push_constant_size);
         let stages = vk::ShaderStageFlags::COMPUTE | vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        // SAFETY: recording; the stages are exactly those of the layout's one push-constant
+        // range (pipeline_layout), and the size is within it (checked in debug builds, and by
+        // the validation layer in every test).
         unsafe { self.ctx.device.cmd_push_constants(self.cmd, p.layout, stages, 0, data) };
     }
 
     /// Dispatches enough groups of `group` threads to cover `extent` threads.
     pub fn dispatch_2d(&self, extent: vk::Extent2D, group: (u32, u32)) {
+        // SAFETY: recording, with the pass's compute pipeline and resources bound first (every
+        // pass records bind, push, dispatch in that order).
         unsafe {
             self.ctx.device.cmd_dispatch(self.cmd, extent.width.div_ceil(group.0), extent.height.div_ceil(group.1), 1)
         };
     }
 
     pub fn dispatch(&self, x: u32, y: u32, z: u32) {
+        // SAFETY: as dispatch_2d.
         unsafe { self.ctx.device.cmd_dispatch(self.cmd, x, y, z) };
     }
 
@@ -126,6 +145,8 @@ impl<'a> Recorder<'a> {
             max_depth: 1.0,
         };
         self.ctx.cmd_begin_rendering(self.cmd, &info);
+        // SAFETY: recording; one viewport and scissor, the count every raster pipeline has
+        // (dynamic state, viewport_count 1).
         unsafe {
             self.ctx.device.cmd_set_viewport(self.cmd, 0, &[viewport]);
             self.ctx.device.cmd_set_scissor(self.cmd, 0, &[area]);
@@ -137,10 +158,13 @@ impl<'a> Recorder<'a> {
     }
 
     pub fn bind_index_buffer(&self, buffer: &Buffer) {
+        // SAFETY: recording; the buffer is borrowed (live), offset 0 is aligned for u32.
         unsafe { self.ctx.device.cmd_bind_index_buffer(self.cmd, buffer.raw, 0, vk::IndexType::UINT32) };
     }
 
     pub fn draw_indexed(&self, index_count: u32, first_index: u32, vertex_offset: i32, first_instance: u32) {
+        // SAFETY: recording inside begin_rendering with a raster pipeline and index buffer
+        // bound (the G-buffer pass's order); its ranges come from the scene's own meshes.
         unsafe {
             self.ctx.device.cmd_draw_indexed(self.cmd, index_count, 1, first_index, vertex_offset, first_instance)
         };
@@ -155,6 +179,10 @@ impl<'a> Recorder<'a> {
                 layer_count: 1,
             })
             .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 });
+        // SAFETY: recording; both objects are borrowed (live). The region is the whole of mip
+        // 0 in the image's own aspect, and the image is in GENERAL like every image the
+        // renderer makes. Callers size `buffer` for the image (read-back buffers are made from
+        // the image's extent and texel size).
         unsafe {
             self.ctx.device.cmd_copy_image_to_buffer(
                 self.cmd,
@@ -176,6 +204,8 @@ impl<'a> Recorder<'a> {
                 layer_count: 1,
             })
             .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 });
+        // SAFETY: as copy_image_to_buffer, the other way; the caller's buffer holds the whole
+        // image's texels (uploads build it from the image's extent and format).
         unsafe {
             self.ctx.device.cmd_copy_buffer_to_image(
                 self.cmd,
@@ -196,6 +226,8 @@ impl<'a> Recorder<'a> {
             height: src.extent.height,
             depth: 1,
         });
+        // SAFETY: recording; both images borrowed (live) and in GENERAL; callers copy between
+        // images of one size and format (history copies of a pass's own outputs).
         unsafe {
             self.ctx.device.cmd_copy_image(
                 self.cmd,
@@ -210,6 +242,7 @@ impl<'a> Recorder<'a> {
 
     pub fn copy_buffer(&self, src: &Buffer, dst: &Buffer, size: u64) {
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size };
+        // SAFETY: recording; both buffers borrowed (live); callers pass a size within both.
         unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]) };
     }
 
@@ -222,12 +255,16 @@ impl<'a> Recorder<'a> {
             .iter()
             .map(|&(src_offset, dst_offset, size)| vk::BufferCopy { src_offset, dst_offset, size })
             .collect();
+        // SAFETY: recording; both buffers borrowed (live); the regions come from the caller's
+        // own layout of the two buffers (deform uploads), within their sizes.
         unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &regions) };
     }
 
     /// Clears a colour image to zero (all bits zero, whatever its format).
     pub fn clear_image(&self, image: &Image) {
         let color = vk::ClearColorValue { uint32: [0; 4] };
+        // SAFETY: recording; the image is borrowed (live), in GENERAL, and the range is its
+        // own full range.
         unsafe {
             self.ctx.device.cmd_clear_color_image(
                 self.cmd,

@@ -42,6 +42,8 @@ impl Sampler {
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .min_lod(0.0)
             .max_lod(if d.mipmaps { vk::LOD_CLAMP_NONE } else { 0.0 });
+        // SAFETY: creation on a live device from an info on this stack frame; anisotropy is
+        // off, so no feature is needed.
         let raw = unsafe { ctx.device.create_sampler(&info, None) }.context("create sampler")?;
         Ok(Self { ctx: ctx.clone(), raw })
     }
@@ -49,6 +51,8 @@ impl Sampler {
 
 impl Drop for Sampler {
     fn drop(&mut self) {
+        // SAFETY: made by `new`, destroyed once, after the frames that sampled with it (as for
+        // images, see memory.rs).
         unsafe { self.ctx.device.destroy_sampler(self.raw, None) };
     }
 }

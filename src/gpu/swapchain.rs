@@ -82,12 +82,16 @@ impl Swapchain {
             stale: true,
         };
         // From here on `s` owns everything made, and its Drop frees it on any error.
+        // SAFETY: the surface was just made on this instance; the queue family is the
+        // context's own (an index the device has).
         let supported = unsafe {
             s.surface_loader.get_physical_device_surface_support(ctx.physical_device, ctx.queue_family, s.surface)
         }?;
         if !supported {
             bail!("the Vulkan device's graphics queue cannot present to this window");
         }
+        // SAFETY: creations on a live device from infos on this stack frame; each handle is
+        // stored in `s` at once, so Drop destroys whatever was made if a later one fails.
         unsafe {
             s.acquired = ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None)?;
             s.fence = ctx.device.create_fence(&vk::FenceCreateInfo::default(), None)?;
@@ -118,10 +122,14 @@ impl Swapchain {
     fn rebuild(&mut self) -> Result<()> {
         let ctx = self.ctx.clone();
         let pd = ctx.physical_device;
+        // SAFETY: the surface is owned by `self` and live, `pd` is the context's physical
+        // device, and `new` checked the queue can present to the surface (so for all three).
         let caps = unsafe { self.surface_loader.get_physical_device_surface_capabilities(pd, self.surface) }?;
+        // SAFETY: as above.
         let formats = unsafe { self.surface_loader.get_physical_device_surface_formats(pd, self.surface) }?;
+        // SAFETY: as above.
         let modes = unsafe { self.surface_loader.get_physical_device_surface_present_modes(pd, self.surface) }?;
-        // UNORM, not SRGB: everything drawn (tonemap output, previews, egui) is display-encoded
+        // UNORM, not SRGB: everything drawn (tonemap output, previews, the overlay) is display-encoded
         // already, so bytes go to the screen unchanged and screenshots equal the PNG captures.
         let format = [vk::Format::B8G8R8A8_UNORM, vk::Format::R8G8B8A8_UNORM]
             .into_iter()
@@ -171,12 +179,19 @@ impl Swapchain {
             .clipped(true)
             .old_swapchain(old);
         ctx.wait_idle()?;
+        // SAFETY: every value in `info` comes from the surface's own capabilities (format and
+        // colour space offered, extent clamped to its limits, count within min..max, usage
+        // within supported_usage_flags, present mode offered or FIFO, which is always there);
+        // `old` is this surface's current swapchain or null, and the device is idle.
         let raw = unsafe { self.loader.create_swapchain(&info, None) }.context("vkCreateSwapchainKHR")?;
         self.destroy_images();
+        // SAFETY: the device is idle (waited above), so no acquired image of `old` is in use;
+        // its views and semaphores went just before; null is ignored.
         unsafe { self.loader.destroy_swapchain(old, None) };
         self.raw = raw;
         self.format = format.format;
         self.extent = extent;
+        // SAFETY: `raw` was just made; its images belong to it (never destroyed by us).
         self.images = unsafe { self.loader.get_swapchain_images(raw) }?;
         for (i, &image) in self.images.iter().enumerate() {
             let view_info = vk::ImageViewCreateInfo::default()
@@ -184,9 +199,11 @@ impl Swapchain {
                 .view_type(vk::ImageViewType::TYPE_2D)
                 .format(self.format)
                 .subresource_range(color_range());
+            // SAFETY: a colour view of a swapchain image in the swapchain's format.
             let view = unsafe { ctx.device.create_image_view(&view_info, None) }?;
             ctx.set_name(image, &format!("swapchain image {i}"));
             self.views.push(view);
+            // SAFETY: creation on a live device.
             let sem = unsafe { ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }?;
             self.rendered.push(sem);
         }
@@ -196,6 +213,8 @@ impl Swapchain {
 
     fn destroy_images(&mut self) {
         let d = &self.ctx.device;
+        // SAFETY: callers make the device idle first (rebuild and Drop wait), so no frame uses
+        // these views or semaphores; each was made by rebuild and is drained, so freed once.
         unsafe {
             for v in self.views.drain(..) {
                 d.destroy_image_view(v, None);
@@ -222,6 +241,9 @@ impl Swapchain {
         if !self.visible() || self.raw == vk::SwapchainKHR::null() {
             return Ok(None);
         }
+        // SAFETY: the swapchain is live and not null (checked above); `acquired` is unsignalled
+        // with no pending wait, because the previous frame's submission waited on it and that
+        // frame was waited for (one frame in flight), and a failed acquire signals nothing.
         let acquired = unsafe { self.loader.acquire_next_image(self.raw, u64::MAX, self.acquired, vk::Fence::null()) };
         let index = match acquired {
             Ok((i, suboptimal)) => {
@@ -240,6 +262,7 @@ impl Swapchain {
             .command_pool(self.pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: the pool is owned by `self` and used only here, under `&mut self`.
         let cmd = unsafe { d.allocate_command_buffers(&alloc) }.context("allocate command buffer")?[0];
         let target = Target {
             image: self.images[index],
@@ -248,7 +271,10 @@ impl Swapchain {
             format: self.format,
             readable: self.readable,
         };
+        // Set between the submission and the end of its wait: `cmd` may still be executing.
+        let mut pending = false;
         let result = (|| {
+            // SAFETY: `cmd` was just allocated (initial state).
             unsafe {
                 d.begin_command_buffer(
                     cmd,
@@ -279,6 +305,7 @@ impl Swapchain {
                 out,
                 (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
             );
+            // SAFETY: `cmd` is recording; `record` records into it but never ends it.
             unsafe { d.end_command_buffer(cmd) }?;
             let cmds = [cmd];
             let waits = [self.acquired];
@@ -289,17 +316,27 @@ impl Swapchain {
                 .wait_semaphores(&waits)
                 .wait_dst_stage_mask(&stages)
                 .signal_semaphores(&signals);
+            // SAFETY: the fence is not in use (the last frame's wait returned, or it was never
+            // submitted); `cmd` is executable; the acquire semaphore has a signal pending from
+            // the acquire above, and `rendered[index]` is unsignalled: its last signal was
+            // consumed by this image's previous present, which finished before the image could
+            // be acquired again. Arrays live on this stack frame.
             unsafe {
                 d.reset_fences(&[self.fence])?;
                 d.queue_submit(ctx.queue, &[submit], self.fence).context("vkQueueSubmit")?;
             }
+            pending = true;
             let swapchains = [self.raw];
             let indices = [index as u32];
             let present =
                 vk::PresentInfoKHR::default().wait_semaphores(&signals).swapchains(&swapchains).image_indices(&indices);
+            // SAFETY: `index` was acquired from this swapchain and is presented once, waiting
+            // on the semaphore the submission signals; the queue can present (checked in new).
             let presented = unsafe { self.loader.queue_present(ctx.queue, &present) };
             // Wait even when presenting failed: the submission itself went ahead.
+            // SAFETY: the fence belongs to this device and was submitted above.
             unsafe { d.wait_for_fences(&[self.fence], true, 600_000_000_000) }.context("wait for the frame")?;
+            pending = false;
             match presented {
                 Ok(suboptimal) => self.stale |= suboptimal,
                 Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => self.stale = true,
@@ -307,7 +344,12 @@ impl Swapchain {
             }
             Ok(r)
         })();
-        unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        if !pending {
+            // SAFETY: `cmd` came from this pool and is not pending: never submitted, or its
+            // fence was waited for. (After a failed wait it is left to the pool, which Drop
+            // destroys after the device is idle.)
+            unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        }
         result.map(Some)
     }
 }
@@ -327,6 +369,9 @@ impl Drop for Swapchain {
         let _ = self.ctx.wait_idle();
         self.destroy_images();
         let d = &self.ctx.device;
+        // SAFETY: the device is idle (waited above), so nothing is pending; each handle was
+        // made by new/rebuild and is destroyed once, the swapchain before its surface. The
+        // window outlives the surface (the contract of `new`).
         unsafe {
             // Null handles (a swapchain never made, a failed start) are ignored by Vulkan.
             self.loader.destroy_swapchain(self.raw, None);

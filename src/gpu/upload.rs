@@ -2,7 +2,7 @@
 //! textures with all their mip levels, and read-back of images for capture and tests.
 
 use super::{Buffer, CommandPool, Context, Image, Recorder, image_barrier};
-use anyhow::Result;
+use anyhow::{Result, bail};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
@@ -30,7 +30,15 @@ pub fn device_buffer(
 
 /// An RGBA8 texture from its mip chain (level 0 first), left in SHADER_READ_ONLY_OPTIMAL.
 pub fn texture(ctx: &Arc<Context>, pool: &CommandPool, name: &str, levels: &[(u32, u32, Vec<u8>)]) -> Result<Image> {
-    let (w, h, _) = levels[0];
+    let Some(&(w, h, _)) = levels.first() else { bail!("texture {name}: no mip levels") };
+    // Each level is the previous halved and holds exactly its texels: the copies below read
+    // the staging buffer and write the image by these sizes.
+    for (i, (lw, lh, d)) in levels.iter().enumerate() {
+        let (ew, eh) = ((w >> i).max(1), (h >> i).max(1));
+        if (*lw, *lh) != (ew, eh) || d.len() as u64 != *lw as u64 * *lh as u64 * 4 {
+            bail!("texture {name}: mip {i} is {lw}x{lh} with {} bytes, expected {ew}x{eh} RGBA8", d.len());
+        }
+    }
     let image = Image::new(
         ctx,
         name,
@@ -70,6 +78,10 @@ pub fn texture(ctx: &Arc<Context>, pool: &CommandPool, name: &str, levels: &[(u3
             (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
             (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
         );
+        // SAFETY: `cmd` is recording (CommandPool::run); the staging buffer and image are
+        // live until `run` has waited for the copy. The regions were checked above to match
+        // the image's mip chain and lie inside the staging buffer (laid out level after
+        // level), and the image was just moved to TRANSFER_DST_OPTIMAL.
         unsafe {
             ctx.device.cmd_copy_buffer_to_image(
                 cmd,

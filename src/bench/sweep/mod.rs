@@ -210,7 +210,7 @@ fn reference(
         bail!("--reference-spp {}: must be even and at least 2 (the reference is two halves)", opts.reference_spp);
     }
     let half = opts.reference_spp / 2;
-    let bar = crate::cli::progress_bar(opts.reference_spp as u64, "reference spp");
+    let bar = crate::progress::progress_bar(opts.reference_spp as u64, "reference spp");
     bar.set_message(format!("{}x{} {}", w, h, scene.name));
     let mut halves = Vec::new();
     for seed in REFERENCE_SEEDS {
@@ -349,7 +349,7 @@ pub fn sweep_scene(
     let hash = scene_hash(spec)?;
     let (reference, reference_info) = reference(ctx, shaders, spec, scene, backend, opts, &hash)?;
     let rounds = opts.rounds.max(1);
-    let bar = crate::cli::progress_bar(opts.configs.len() as u64 * opts.frames as u64 * rounds as u64, "frames");
+    let bar = crate::progress::progress_bar(opts.configs.len() as u64 * opts.frames as u64 * rounds as u64, "frames");
     let mut points: Vec<Point> = Vec::new();
     for round in 0..rounds {
         for (i, &config) in opts.configs.iter().enumerate() {
