@@ -410,7 +410,7 @@ pub fn facet_test() -> Scene {
     s.meshes.push(quad(Vec3::new(0.0, 3.5, 1.0), Vec3::X * 2.0, Vec3::Z * 1.5, 2));
     let at = [Vec3::ZERO, Vec3::ZERO, Vec3::new(-1.15, 1.0, 0.0), Vec3::new(1.15, 1.0, 0.0), Vec3::ZERO];
     for (i, p) in at.into_iter().enumerate() {
-        s.nodes.push(node(&s.meshes[i].name.clone(), p));
+        s.nodes.push(node(&s.meshes[i].name, p));
         s.instances.push(Instance { mesh: i as u32, node: i as u32 });
     }
     let eye = Vec3::new(0.0, 1.3, 4.5);
