@@ -1,7 +1,7 @@
 #version 460
 // svgf_atrous: one iteration of the edge-avoiding a-trous wavelet filter: a 5x5 B3-spline
-// kernel with holes (step 2^i), weighted by depth (scaled by the surface's depth slope), normal
-// (power sigma_n) and luminance (scaled by the 3x3-prefiltered standard deviation). Colour is
+// kernel with holes (step 2^i), weighted by depth (scaled by the surface's depth slope), shading
+// normal (power sigma_n; see svgf_weight_normal) and luminance (scaled by the 3x3-prefiltered standard deviation). Colour is
 // filtered with the weights, variance with their squares, so the next iteration stops at the
 // right edges.
 #extension GL_GOOGLE_include_directive : require
@@ -13,7 +13,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, r32f) uniform readonly image2D in_variance;
 layout(set = 1, binding = 2, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_normal;  // shading normal (gbuffer.normal)
 layout(set = 1, binding = 4, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 5, rgba32f) uniform writeonly image2D out_color;
 layout(set = 1, binding = 6, r32f) uniform writeonly image2D out_variance;

@@ -2,7 +2,7 @@
 // svgf_temporal: temporal accumulation of one demodulated signal (diffuse or specular). The
 // previous frame's filtered colour (the first a-trous iteration, copied by `history`), moments
 // and history length are reprojected through the motion vectors with bilinear taps that each
-// pass the validity test (on screen, same instance, depth, normal); the new frame is blended in
+// pass the validity test (on screen, same instance, depth, geometric normal); the new frame is blended in
 // with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
 // counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood, so
 // neither poisons the history.
@@ -14,11 +14,13 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_signal;
 layout(set = 1, binding = 1, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal;
+// The geometric (face) normal: reprojection asks whether the previous sample lies on the same
+// surface, and a crease that smooth vertex normals round off is still a different surface.
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 3, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_motion;
 layout(set = 1, binding = 5, rg32f) uniform readonly image2D prev_depth;
-layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal;
+layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal_geo;
 layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
 layout(set = 1, binding = 8, rgba32f) uniform readonly image2D prev_color;
 layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
@@ -83,7 +85,7 @@ void main() {
 
     vec2 zf = imageLoad(g_depth, px).rg;
     float z = zf.x;
-    vec3 n = imageLoad(g_normal, px).xyz;
+    vec3 ng = imageLoad(g_normal_geo, px).xyz;
     float fw = zf.y;
     // Where this pixel's surface was last frame, in continuous pixel coordinates.
     vec2 prev_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
@@ -96,7 +98,7 @@ void main() {
     for (int i = 0; i < 4 && !reset; ++i) {
         ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
         if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
-        if (!svgf_consistent(z, imageLoad(prev_depth, q).r, fw, n, imageLoad(prev_normal, q).xyz, id,
+        if (!svgf_consistent(z, imageLoad(prev_depth, q).r, fw, ng, imageLoad(prev_normal_geo, q).xyz, id,
                              imageLoad(prev_ids, q).x)) continue;
         float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
         hist_c += w * imageLoad(prev_color, q).rgb;

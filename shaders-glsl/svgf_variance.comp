@@ -12,7 +12,7 @@ layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, rg32f) uniform readonly image2D in_moments;
 layout(set = 1, binding = 2, r32f) uniform readonly image2D in_length;
 layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_normal;  // shading normal (gbuffer.normal)
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 6, r32f) uniform writeonly image2D out_variance;
 

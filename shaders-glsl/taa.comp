@@ -1,8 +1,8 @@
 #version 460
 // taa: temporal anti-aliasing of the composited HDR frame. The G-buffer was rasterised with a
 // sub-pixel jitter (Halton 2,3); the previous result is reprojected through the motion vectors
-// (bilinear), clamped to the YCoCg bounding box of this frame's 3x3 neighbourhood, and blended
-// with the new frame. Disocclusion is told by motion, not by instance id: where the surface
+// (Catmull-Rom), clamped to the YCoCg bounding box of this frame's 3x3 neighbourhood, and
+// blended with the new frame, which weighs more the faster the image moves. Disocclusion is told by motion, not by instance id: where the surface
 // seen last frame at the reprojected spot moved differently from the one seen now, something
 // uncovered this pixel and the history is dropped. (An id test would also drop the history at
 // every silhouette, where the jitter alternates between two surfaces, and nothing would be
@@ -21,6 +21,11 @@ layout(set = 1, binding = 4, rgba32f) uniform writeonly image2D out_color;
 
 // Motion vectors differing by more than this many pixels belong to different surfaces.
 #define DISOCCLUSION_MOTION 0.5
+// The new frame's weight rises linearly with the motion from `taa.blend` (still) to FAST_BLEND
+// at FAST_MOTION pixels a frame and above (no history: at that speed what the clamp lets
+// through is smear, not detail). Tuned on the stability suite's fast pan (2.5 px a frame).
+#define FAST_MOTION 4.0
+#define FAST_BLEND 1.0
 
 layout(push_constant) uniform TaaParams {
     float blend;  // weight of the new frame
@@ -31,6 +36,30 @@ vec3 to_ycocg(vec3 c) {
 }
 
 vec3 from_ycocg(vec3 c) { return vec3(c.x + c.y - c.z, c.x + c.z, c.x - c.y - c.z); }
+
+// Catmull-Rom filtered history at continuous pixel position `pos` from five bilinear fetches
+// (the corner taps of the 4x4 footprint, whose weights are tiny, are left out and the rest
+// renormalised). A bilinear fetch blurs by up to half a pixel, and the history is resampled
+// every frame it moves: during a pan that blur compounds into a smear; Catmull-Rom keeps it
+// sharp.
+vec3 history_catmull_rom(vec2 pos) {
+    vec2 size = vec2(frame.size);
+    vec2 centre = floor(pos - 0.5) + 0.5;
+    vec2 f = pos - centre;
+    vec2 w0 = f * (-0.5 + f * (1.0 - 0.5 * f));
+    vec2 w1 = 1.0 + f * f * (-2.5 + 1.5 * f);
+    vec2 w2 = f * (0.5 + f * (2.0 - 1.5 * f));
+    vec2 w3 = f * f * (-0.5 + 0.5 * f);
+    vec2 w12 = w1 + w2;
+    vec2 t0 = (centre - 1.0) / size, t3 = (centre + 2.0) / size, t12 = (centre + w2 / w12) / size;
+    vec3 sum = textureLod(prev_color, vec2(t12.x, t0.y), 0.0).rgb * (w12.x * w0.y) +
+               textureLod(prev_color, vec2(t0.x, t12.y), 0.0).rgb * (w0.x * w12.y) +
+               textureLod(prev_color, t12, 0.0).rgb * (w12.x * w12.y) +
+               textureLod(prev_color, vec2(t3.x, t12.y), 0.0).rgb * (w3.x * w12.y) +
+               textureLod(prev_color, vec2(t12.x, t3.y), 0.0).rgb * (w12.x * w3.y);
+    float wsum = w12.x * w0.y + w0.x * w12.y + w12.x * w12.y + w3.x * w12.y + w12.x * w3.y;
+    return max(sum / wsum, vec3(0.0));
+}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -59,8 +88,9 @@ void main() {
     }
     vec3 result = cur;
     if (valid) {
-        vec3 hist = to_ycocg(textureLod(prev_color, prev_pos / vec2(frame.size), 0.0).rgb);
-        result = mix(from_ycocg(clamp(hist, lo, hi)), cur, taa.blend);
+        vec3 hist = to_ycocg(history_catmull_rom(prev_pos));
+        float blend = mix(taa.blend, FAST_BLEND, clamp(length(motion) / FAST_MOTION, 0.0, 1.0));
+        result = mix(from_ycocg(clamp(hist, lo, hi)), cur, blend);
     }
     imageStore(out_color, px, vec4(result, 1.0));
 }

@@ -21,11 +21,12 @@ layout(push_constant) uniform SvgfParams {
 bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
 
 // Can the previous frame's sample at `prev_px` stand for this pixel? Same instance, similar
-// depth (relative to how fast depth changes here) and similar normal (Falcor's tests).
-bool svgf_consistent(float z, float z_prev, float fwidth_z, vec3 n, vec3 n_prev, uint id, uint id_prev) {
+// depth (relative to how fast depth changes here) and similar geometric normal (Falcor's
+// tests).
+bool svgf_consistent(float z, float z_prev, float fwidth_z, vec3 ng, vec3 ng_prev, uint id, uint id_prev) {
     if (id != id_prev) return false;
     if (abs(z - z_prev) / (fwidth_z + 1e-2) > 10.0) return false;
-    return dot(n, n_prev) > 0.9;
+    return dot(ng, ng_prev) > 0.9;
 }
 
 // Depth weight: the difference against how much depth may change over the offset on this
@@ -34,6 +35,14 @@ float svgf_weight_depth(float z_p, float z_q, float fwidth_z, float offset_lengt
     return exp(-abs(z_p - z_q) / (svgf.sigma_z * fwidth_z * offset_length + 1e-4));
 }
 
+// Normal weight on the shading normal (gbuffer.normal: the interpolated vertex normal, with the
+// normal map where the material has one), never the face normal: neighbouring faces of a
+// smooth, coarsely tessellated surface differ by several degrees, and with sigma_n 128 the
+// weight across their edge (0.08 at 11 degrees) would filter every triangle on its own and
+// leave each with its own residual noise: the surface would look faceted. The normal-mapped
+// normal rather than the bare vertex normal because the demodulated signals are shaded with
+// it (gi.comp, reflections.comp) and composite does not shade them again: filtering across
+// normal-map detail would blur the detail out of the area, environment and indirect light.
 float svgf_weight_normal(vec3 n_p, vec3 n_q) { return pow(max(0.0, dot(n_p, n_q)), svgf.sigma_n); }
 
 // sigma_l = infinity switches luminance edge-stopping off (the impulse-response test does).

@@ -262,7 +262,7 @@ pub fn fast_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
         }
     }
     let mean = errors.iter().sum::<f64>() / errors.len() as f64;
-    Ok(vec![measure("during the pan: rel. error", "fraction", mean, if denoised { 0.35 } else { 0.25 })])
+    Ok(vec![measure("during the pan: rel. error", "fraction", mean, if denoised { 0.27 } else { 0.25 })])
 }
 
 /// **Moving object** in `stability-slide`: a dark cube slides across the sunlit checkerboard

@@ -1,5 +1,6 @@
 //! taa: temporal anti-aliasing of the composited HDR frame (shaders-glsl/taa.comp): jittered
-//! G-buffer, YCoCg neighbourhood clamp, history rejected on disocclusion (motion mismatch).
+//! G-buffer, Catmull-Rom history, YCoCg neighbourhood clamp, less history the faster the image
+//! moves, history rejected on disocclusion (motion mismatch).
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Read};
@@ -10,7 +11,8 @@ use anyhow::Result;
 
 pub const NAME: &str = "taa";
 pub const COLOR: &str = "taa.color";
-/// Weight of the new frame in the blend.
+/// Weight of the new frame in the blend where the image holds still (taa.comp raises it with
+/// the motion).
 pub const BLEND: f32 = 0.1;
 
 pub fn new(b: &PassBuilder, input: &str) -> Result<FullscreenPass> {

@@ -8,7 +8,7 @@ use glam::{Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:` (with the stability suite's, `super::builtin_stability::NAMES`).
 pub const NAMES: &[&str] =
-    &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test", "morph-test"];
+    &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test", "facet-test", "morph-test"];
 
 pub fn by_name(name: &str) -> Result<Scene> {
     match name {
@@ -17,6 +17,7 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "shadow-test" => Ok(shadow_test()),
         "soft-shadow-test" => Ok(soft_shadow_test()),
         "checker-test" => Ok(checker_test()),
+        "facet-test" => Ok(facet_test()),
         "morph-test" => Ok(morph_test()),
         _ => super::builtin_stability::by_name(name).ok_or_else(|| {
             let known = [NAMES, super::builtin_stability::NAMES].concat().join(", ");
@@ -372,6 +373,59 @@ pub(super) fn node(name: &str, t: Vec3) -> Node {
 
 fn vertex(p: Vec3, n: Vec3, t: Vec3, uv: [f32; 2]) -> Vertex {
     Vertex { position: p.to_array(), normal: n.to_array(), tangent: t.extend(1.0).to_array(), uv0: uv, uv1: uv }
+}
+
+/// Facts about `facet_test`.
+pub mod facet_test_facts {
+    /// Both spheres are UV spheres of this many segments and rings (the default scene's gold
+    /// sphere has the same tessellation): neighbouring faces differ by 11.25 degrees.
+    pub const SEGMENTS: u32 = 32;
+    pub const RINGS: u32 = 16;
+    pub const DIFFUSE_SPHERE_INSTANCE: u32 = 2;
+    pub const GLOSSY_SPHERE_INSTANCE: u32 = 3;
+}
+
+/// Two smooth-shaded, coarsely tessellated spheres on a floor in front of a wall, lit only by
+/// an emissive panel above them (an area light, so their light is a noisy ray-traced signal):
+/// a white diffuse one and a gold one as glossy as the default scene's. Their true shading is
+/// smooth; after denoising it must not step at the triangle edges.
+pub fn facet_test() -> Scene {
+    use facet_test_facts::*;
+    let mut s = Scene { name: "builtin:facet-test".into(), ..Default::default() };
+    let plain = |name: &str, color: Vec4, metallic: f32, roughness: f32| Material {
+        name: name.into(),
+        base_color_factor: color,
+        metallic_factor: metallic,
+        roughness_factor: roughness,
+        ..Default::default()
+    };
+    s.materials.push(plain("white", Vec4::new(0.8, 0.8, 0.8, 1.0), 0.0, 1.0));
+    s.materials.push(plain("gold", Vec4::new(1.0, 0.78, 0.34, 1.0), 1.0, 0.25));
+    s.materials.push(Material { emissive_factor: Vec3::splat(6.0), ..plain("panel", Vec4::ZERO, 0.0, 1.0) });
+    s.meshes.push(quad(Vec3::ZERO, Vec3::Z * 8.0, Vec3::X * 8.0, 0));
+    s.meshes.push(quad(Vec3::new(0.0, 2.0, -2.5), Vec3::X * 8.0, Vec3::Y * 4.0, 0));
+    s.meshes.push(uv_sphere(1.0, SEGMENTS, RINGS, 0));
+    s.meshes.push(uv_sphere(1.0, SEGMENTS, RINGS, 1));
+    // Above the spheres, facing down, a little toward the camera.
+    s.meshes.push(quad(Vec3::new(0.0, 3.5, 1.0), Vec3::X * 2.0, Vec3::Z * 1.5, 2));
+    let at = [Vec3::ZERO, Vec3::ZERO, Vec3::new(-1.15, 1.0, 0.0), Vec3::new(1.15, 1.0, 0.0), Vec3::ZERO];
+    for (i, p) in at.into_iter().enumerate() {
+        s.nodes.push(node(&s.meshes[i].name, p));
+        s.instances.push(Instance { mesh: i as u32, node: i as u32 });
+    }
+    let eye = Vec3::new(0.0, 1.3, 4.5);
+    let mut cam = node("camera", eye);
+    cam.rotation = Quat::from_mat4(&glam::Mat4::look_at_rh(eye, Vec3::new(0.0, 1.0, 0.0), Vec3::Y).inverse());
+    s.nodes.push(cam);
+    s.cameras.push(Camera {
+        name: "front".into(),
+        yfov: 0.65,
+        aspect_ratio: None,
+        znear: 0.05,
+        zfar: Some(50.0),
+        node: s.nodes.len() as u32 - 1,
+    });
+    s
 }
 
 /// Facts about `morph_test` that tests check against.

@@ -14,7 +14,7 @@ pub fn new(b: &PassBuilder, names: &Names, i: u32, s: &SvgfSettings) -> Result<F
     } else {
         (format!("{}.color", names.atrous(i - 1)), format!("{}.variance", names.atrous(i - 1)))
     };
-    let inputs = [color, variance, "gbuffer.depth".into(), "gbuffer.normal_geo".into(), "gbuffer.ids".into()]
+    let inputs = [color, variance, "gbuffer.depth".into(), "gbuffer.normal".into(), "gbuffer.ids".into()]
         .map(|n| (n, Read::Texel))
         .to_vec();
     let name = names.atrous(i);

@@ -15,7 +15,7 @@ pub fn new(b: &PassBuilder, names: &Names, s: &SvgfSettings) -> Result<Fullscree
         format!("{t}.moments"),
         format!("{t}.history_length"),
         "gbuffer.depth".into(),
-        "gbuffer.normal_geo".into(),
+        "gbuffer.normal".into(),
         "gbuffer.ids".into(),
     ]
     .map(|i| (i, Read::Texel))
