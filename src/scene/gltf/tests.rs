@@ -102,7 +102,7 @@ impl Gltf {
 
     /// Appends bytes at a 4-byte aligned offset as a new buffer view.
     fn view(&mut self, bytes: &[u8]) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let offset = self.bin.len();
@@ -157,11 +157,11 @@ impl Gltf {
 
     fn glb_bytes(&self) -> Vec<u8> {
         let mut json = serde_json::to_vec(&self.json).unwrap();
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let mut bin = self.bin.clone();
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let total = 12 + 8 + json.len() + 8 + bin.len();
