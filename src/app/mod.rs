@@ -10,14 +10,17 @@
 //! Scripts (`--script`, see [`script`]) make runs reproducible for tests.
 
 mod camera;
+mod commands;
 mod hot_reload;
+mod input;
 mod overlay_painter;
+mod rebuild;
 pub mod script;
 mod tunables;
 mod ui;
 
 use crate::backend::{self, Backend, BackendChoice};
-use crate::capture::{self, Capture};
+use crate::capture;
 use crate::gpu::{Context, ContextOptions, Presenter, ShaderLibrary, Shown, Swapchain, vk};
 use crate::graph::Preview;
 use crate::image_io;
@@ -26,17 +29,17 @@ use crate::scene::Scene;
 use anyhow::{Context as _, Result, anyhow, bail};
 use camera::{Controller, Mode};
 use glam::Vec3;
+use input::Input;
 use overlay_painter::OverlayFrame;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use script::Command;
-use std::collections::{HashSet, VecDeque};
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
-use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 /// How the viewer starts.
@@ -124,20 +127,6 @@ impl ApplicationHandler for App {
             event_loop.set_control_flow(ControlFlow::Wait);
         }
     }
-}
-
-/// Keys and buttons held, and mouse movement since the last frame.
-#[derive(Default)]
-struct Input {
-    keys: HashSet<KeyCode>,
-    /// Keys pressed since the last frame: a tap shorter than a slow frame still moves.
-    tapped: HashSet<KeyCode>,
-    buttons: HashSet<MouseButton>,
-    cursor: Option<(f64, f64)>,
-    /// Movement while the left / the right or middle button was held, pixels.
-    drag_left: (f32, f32),
-    drag_right: (f32, f32),
-    wheel: f32,
 }
 
 /// Animation time: `start_time + steps * frame_dt`, the renderer's own formula, so a viewer
@@ -259,106 +248,6 @@ impl Viewer {
         })
     }
 
-    /// Handles a window event; `false` ends the viewer.
-    fn window_event(&mut self, event: WindowEvent) -> Result<bool> {
-        let consumed = self.egui_state.on_window_event(&self.window, &event).consumed;
-        match event {
-            WindowEvent::CloseRequested => return Ok(false),
-            WindowEvent::Resized(size) => {
-                self.swapchain.resize(size.width, size.height);
-                self.resized_at = Some(Instant::now());
-            }
-            WindowEvent::RedrawRequested => return self.redraw(),
-            WindowEvent::KeyboardInput { event, .. } => {
-                let PhysicalKey::Code(code) = event.physical_key else { return Ok(true) };
-                if event.state == ElementState::Released {
-                    // Releases always count, so a key never sticks when egui took the press.
-                    self.input.keys.remove(&code);
-                } else if !consumed && !self.egui.wants_keyboard_input() {
-                    self.input.keys.insert(code);
-                    self.input.tapped.insert(code);
-                    if !event.repeat {
-                        return self.shortcut(code);
-                    }
-                }
-            }
-            WindowEvent::MouseInput { state, button, .. } => match state {
-                ElementState::Pressed if !consumed && !self.egui.wants_pointer_input() => {
-                    self.input.buttons.insert(button);
-                }
-                _ => {
-                    self.input.buttons.remove(&button);
-                }
-            },
-            WindowEvent::CursorMoved { position, .. } => {
-                if let Some((x, y)) = self.input.cursor {
-                    let d = ((position.x - x) as f32, (position.y - y) as f32);
-                    let add = |acc: &mut (f32, f32)| *acc = (acc.0 + d.0, acc.1 + d.1);
-                    if self.input.buttons.contains(&MouseButton::Left) {
-                        add(&mut self.input.drag_left);
-                    }
-                    if self.input.buttons.contains(&MouseButton::Right)
-                        || self.input.buttons.contains(&MouseButton::Middle)
-                    {
-                        add(&mut self.input.drag_right);
-                    }
-                }
-                self.input.cursor = Some((position.x, position.y));
-            }
-            WindowEvent::MouseWheel { delta, .. } if !consumed && !self.egui.wants_pointer_input() => {
-                self.input.wheel += match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
-                };
-            }
-            _ => {}
-        }
-        Ok(true)
-    }
-
-    /// Keyboard shortcuts (while the overlay does not take the keyboard).
-    fn shortcut(&mut self, code: KeyCode) -> Result<bool> {
-        match code {
-            KeyCode::Escape => return Ok(false),
-            // Not Tab: egui takes it for moving the keyboard focus.
-            KeyCode::KeyO => {
-                let next = if self.camera.mode == Mode::Orbit { Mode::Fly } else { Mode::Orbit };
-                self.set_camera_mode(next);
-            }
-            KeyCode::Space => self.clock.playing = !self.clock.playing,
-            KeyCode::Period if !self.clock.playing => self.clock.steps += 1,
-            KeyCode::KeyV => self.swapchain.set_vsync(!self.swapchain.vsync),
-            KeyCode::F1 | KeyCode::KeyH => self.ui_visible = !self.ui_visible,
-            KeyCode::F12 | KeyCode::KeyP => self.pending_screenshot = Some(self.next_free("screenshot_", ".png")),
-            KeyCode::KeyC if !self.cameras.is_empty() => {
-                let next = self.renderer.camera_index().map_or(0, |i| (i + 1) % self.cameras.len());
-                self.renderer.set_camera(&CameraChoice::Index(next))?;
-                self.camera.mode = Mode::Scene;
-            }
-            _ => {}
-        }
-        Ok(true)
-    }
-
-    fn set_camera_mode(&mut self, mode: Mode) {
-        if self.camera.mode == Mode::Scene && mode != Mode::Scene {
-            // Take over from wherever the scene camera is now, orbiting the scene's centre
-            // distance.
-            let view = self.renderer.last_view.unwrap_or_else(|| self.renderer.view_of(&self.renderer.pose_of(0)));
-            let pose = self.renderer.pose_of(self.renderer.frame_index);
-            let (lo, hi) = self.renderer.scene.bounds(&pose);
-            let (centre, radius) = if lo.is_finite() && hi.is_finite() {
-                ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
-            } else {
-                (Vec3::ZERO, 1.0)
-            };
-            let distance = (centre - view.position).dot(-view.view.inverse().z_axis.truncate()).max(1e-2);
-            self.camera = Controller::from_view(mode, &view, distance, (centre, radius));
-        } else {
-            self.camera.mode = mode;
-        }
-    }
-
     /// One redraw: a script step, or an interactive frame.
     fn redraw(&mut self) -> Result<bool> {
         let now = Instant::now();
@@ -386,214 +275,6 @@ impl Viewer {
             self.message = format!("screenshot failed: {e:#}");
         }
         Ok(true)
-    }
-
-    /// Runs script commands up to the next one that draws.
-    fn script_step(&mut self) -> Result<bool> {
-        loop {
-            if self.frames_left > 0 {
-                self.frames_left -= 1;
-                self.render()?;
-                self.present(None)?;
-                return Ok(true);
-            }
-            let Some(cmd) = self.script.as_mut().and_then(VecDeque::pop_front) else {
-                self.script = None;
-                self.message = "script done".into();
-                return Ok(true);
-            };
-            match cmd {
-                Command::Frames(n) => self.frames_left = n,
-                Command::View(name) => self.set_view(&name)?,
-                Command::Screenshot(path) => {
-                    if !self.present(Some(&path))? {
-                        // Nothing was drawn (the swapchain was being rebuilt): again next time.
-                        self.script.as_mut().expect("running").push_front(Command::Screenshot(path));
-                    }
-                    return Ok(true);
-                }
-                Command::Capture(dir) => {
-                    self.capture(Some(dir))?;
-                }
-                Command::Camera(name) => match name.as_str() {
-                    "fly" => self.set_camera_mode(Mode::Fly),
-                    "orbit" => self.set_camera_mode(Mode::Orbit),
-                    _ => {
-                        let choice: CameraChoice = name.parse().unwrap_or_default();
-                        self.renderer.set_camera(&choice)?;
-                        self.camera.mode = Mode::Scene;
-                    }
-                },
-                Command::Pause => self.clock.playing = false,
-                Command::Play => self.clock.playing = true,
-                Command::Step => self.clock.steps += 1,
-                Command::Reload => self.hot_reload(true)?,
-                Command::Ui(on) => self.ui_visible = on,
-                Command::Vsync(on) => self.swapchain.set_vsync(on),
-                Command::Set(key, value) => {
-                    tunables::set(&mut self.edit, &key, &value)?;
-                    if let Some(e) = self.apply_settings() {
-                        bail!("script: {key}={value}: {e}");
-                    }
-                }
-                Command::Quit => return Ok(false),
-            }
-        }
-    }
-
-    fn set_view(&mut self, name: &str) -> Result<()> {
-        if self.renderer.graph.image(name).is_none() {
-            bail!("no pass output named {name}; the frame has: {}", self.renderer.graph.output_order.join(", "));
-        }
-        self.view = name.to_string();
-        Ok(())
-    }
-
-    /// Polls the shader folder (interactive runs) or, when `now`, recompiles it and waits
-    /// (scripts and the reload button's scripted twin).
-    fn hot_reload(&mut self, now: bool) -> Result<()> {
-        let Some(w) = self.watcher.as_mut() else {
-            if now {
-                bail!("reload: no shader folder is watched (--watch-shaders DIR)");
-            }
-            return Ok(());
-        };
-        let result = if now {
-            w.start_compile();
-            w.wait()
-        } else {
-            if w.poll_changes() {
-                w.start_compile();
-            }
-            w.finished()
-        };
-        if let Some(result) = result {
-            self.shaders_compiled(result);
-        }
-        Ok(())
-    }
-
-    /// A compile finished: with new shaders the frame and the presenter are rebuilt; on any
-    /// failure the old library and pipelines stay and the error is shown.
-    fn shaders_compiled(&mut self, result: Result<ShaderLibrary>) {
-        let built = result.and_then(|lib| {
-            let presenter = Presenter::new(&self.ctx, &lib, self.swapchain.format)?;
-            let old = std::mem::replace(&mut self.shaders, lib);
-            match self.renderer.rebuild_frame(&self.shaders) {
-                Ok(()) => {
-                    self.presenter = presenter;
-                    Ok(())
-                }
-                Err(e) => {
-                    self.shaders = old;
-                    Err(e)
-                }
-            }
-        });
-        match built {
-            Ok(()) => {
-                self.shader_error = None;
-                self.message = "shaders reloaded".into();
-                self.fall_back_view();
-            }
-            Err(e) => {
-                // Also on stderr: a terminal (or a test) sees it without the overlay.
-                eprintln!("shader reload failed, the previous shaders stay in use: {e:#}");
-                self.shader_error = Some(format!("{e:#}"));
-            }
-        }
-    }
-
-    /// The shown output may be gone after a rebuild (TAA off removes `taa.color`).
-    fn fall_back_view(&mut self) {
-        if self.renderer.graph.image(&self.view).is_none() {
-            self.view = crate::render::DISPLAY_OUTPUT.to_string();
-        }
-    }
-
-    /// Applies the overlay's (or a script's) settings; returns the error when the frame
-    /// could not be rebuilt with them (the old settings then stay).
-    fn apply_settings(&mut self) -> Option<String> {
-        let current = &self.renderer.settings;
-        let changed: Vec<_> = tunables::ALL.iter().filter(|t| (t.get)(current) != (t.get)(&self.edit)).collect();
-        if changed.is_empty() {
-            return None;
-        }
-        let rebuild = changed.iter().any(|t| t.rebuild);
-        let old = std::mem::replace(&mut self.renderer.settings, self.edit.clone());
-        if rebuild && let Err(e) = self.renderer.rebuild_frame(&self.shaders) {
-            self.renderer.settings = old.clone();
-            self.edit = old;
-            let e = format!("{e:#}");
-            self.message = format!("settings not applied: {e}");
-            return Some(e);
-        }
-        self.fall_back_view();
-        None
-    }
-
-    /// Interactive runs render at the window's size once it has stopped changing (every size
-    /// rebuilds the frame's images).
-    fn follow_window_size(&mut self) -> Result<()> {
-        let Some(at) = self.resized_at else { return Ok(()) };
-        if at.elapsed() < Duration::from_millis(300) {
-            return Ok(());
-        }
-        self.resized_at = None;
-        let size = self.window.inner_size();
-        let s = &self.renderer.settings;
-        if size.width == 0 || size.height == 0 || (size.width, size.height) == (s.width, s.height) {
-            return Ok(());
-        }
-        let old = self.renderer.settings.clone();
-        self.renderer.settings.width = size.width;
-        self.renderer.settings.height = size.height;
-        if let Err(e) = self.renderer.rebuild_frame(&self.shaders) {
-            self.renderer.settings = old;
-            self.message = format!("kept the render size: {e:#}");
-        }
-        self.edit.width = self.renderer.settings.width;
-        self.edit.height = self.renderer.settings.height;
-        Ok(())
-    }
-
-    fn move_camera(&mut self) {
-        let held = |k| self.input.keys.contains(&k) || self.input.tapped.contains(&k);
-        let axis = |neg, pos| (held(pos) as i32 - held(neg) as i32) as f32;
-        let dir = Vec3::new(
-            axis(KeyCode::KeyA, KeyCode::KeyD),
-            axis(KeyCode::KeyQ, KeyCode::KeyE),
-            axis(KeyCode::KeyS, KeyCode::KeyW),
-        );
-        let fast = held(KeyCode::ShiftLeft) || held(KeyCode::ShiftRight);
-        let (left, right, wheel) = (self.input.drag_left, self.input.drag_right, self.input.wheel);
-        self.input.drag_left = (0.0, 0.0);
-        self.input.drag_right = (0.0, 0.0);
-        self.input.wheel = 0.0;
-        self.input.tapped.clear();
-        let moved = dir != Vec3::ZERO || left != (0.0, 0.0) || right != (0.0, 0.0) || wheel != 0.0;
-        if moved && self.camera.mode == Mode::Scene {
-            self.set_camera_mode(Mode::Fly);
-        }
-        // Slow devices (lavapipe: about a frame a second) still move at the set speed; a stall
-        // (a rebuild, a shader compile) does not jump the camera far.
-        let dt = (self.frame_ms / 1000.0).min(0.5);
-        match self.camera.mode {
-            Mode::Scene => {}
-            Mode::Fly => {
-                self.camera.fly(dir, dt, fast);
-                // Either button looks around in fly mode.
-                self.camera.look(left.0 + right.0, left.1 + right.1);
-            }
-            Mode::Orbit => {
-                self.camera.fly(dir, dt, fast);
-                self.camera.orbit(left.0, left.1);
-                self.camera.pan(right.0, right.1);
-            }
-        }
-        if wheel != 0.0 {
-            self.camera.wheel(wheel);
-        }
     }
 
     fn render(&mut self) -> Result<()> {
@@ -687,65 +368,5 @@ impl Viewer {
         self.egui_state.handle_platform_output(&self.window, out.platform_output);
         let primitives = self.egui.tessellate(out.shapes, out.pixels_per_point);
         (Some((primitives, out.textures_delta, out.pixels_per_point)), actions)
-    }
-
-    /// What the overlay asked for; failures become its message (interactive use goes on).
-    fn ui_action(&mut self, action: ui::Action) {
-        let result = match action {
-            ui::Action::View(name) => self.set_view(&name),
-            ui::Action::SceneCamera(i) => {
-                self.camera.mode = Mode::Scene;
-                self.renderer.set_camera(&CameraChoice::Index(i))
-            }
-            ui::Action::CameraMode(mode) => {
-                self.set_camera_mode(mode);
-                Ok(())
-            }
-            ui::Action::Play(on) => {
-                self.clock.playing = on;
-                Ok(())
-            }
-            ui::Action::Step => {
-                self.clock.steps += 1;
-                Ok(())
-            }
-            ui::Action::Vsync(on) => {
-                self.swapchain.set_vsync(on);
-                Ok(())
-            }
-            ui::Action::Reload => {
-                if let Some(w) = self.watcher.as_mut() {
-                    w.start_compile();
-                }
-                Ok(())
-            }
-            ui::Action::Screenshot => {
-                self.pending_screenshot = Some(self.next_free("screenshot_", ".png"));
-                Ok(())
-            }
-            ui::Action::Capture => self.capture(None).map(|_| ()),
-        };
-        if let Err(e) = result {
-            self.message = format!("{e:#}");
-        }
-    }
-
-    /// Dumps every pass output of the current frame (the capture of `render --dump-passes`).
-    fn capture(&mut self, dir: Option<PathBuf>) -> Result<PathBuf> {
-        let dir = dir.unwrap_or_else(|| self.next_free("capture_", ""));
-        let scene = self.renderer.scene.name.clone();
-        let mut c = Capture::new(&dir, false, self.force, &scene, &self.ctx.caps.device_name)?;
-        c.dump(&mut self.renderer)?;
-        self.message = format!("captured every pass output into {}", dir.display());
-        println!("capture {}", dir.display());
-        Ok(dir)
-    }
-
-    /// `out_dir/PREFIX0001SUFFIX`, the first number not taken.
-    fn next_free(&self, prefix: &str, suffix: &str) -> PathBuf {
-        (1..)
-            .map(|i| self.out_dir.join(format!("{prefix}{i:04}{suffix}")))
-            .find(|p| !p.exists())
-            .expect("some number is free")
     }
 }
