@@ -49,9 +49,8 @@ void main() {
         float v_i = i < 4u ? vis[i] : 1.0;
         radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * v_i;
     }
-    // The diffuse signal is the lobe without its view-side factors (gi.comp).
-    vec3 view_side = (1.0 - brdf_specular_albedo(m, max(dot(n, v), 0.0))) / max(1.0 - brdf_specular_albedo_avg(m), vec3(1e-4));
-    radiance += brdf_diffuse_albedo(m) * view_side * imageLoad(diffuse_signal, px).rgb;
+    // The diffuse signal is the lobe without its albedo (gi.comp).
+    radiance += brdf_diffuse_albedo(m) * imageLoad(diffuse_signal, px).rgb;
     radiance += imageLoad(specular_signal, px).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

@@ -1,8 +1,9 @@
 #version 460
 // gi: diffuse global illumination, demodulated so the denoiser keeps texture detail: per pixel
 // one cosine-sampled bounce plus one light sample. The output is the diffuse lobe's integral
-// without its view-side factors, (1/pi) int L (1 - E(l)) cos: composite multiplies by the
-// albedo and (1 - E(v)) / (1 - E_avg), which makes it exactly the BRDF's diffuse lobe.
+// without its albedo, (1/pi) int L w(v, l) cos with w = brdf_diffuse_weight (the model's
+// Fresnel or energy coupling, which depends on both directions and so must be inside the
+// integral): composite multiplies by the albedo, which makes it exactly the BRDF's diffuse lobe.
 //
 // On surfaces rougher than the reflection cut-off, where the reflections pass traces no rays,
 // the same samples also estimate the specular lobe (gi.specular, not demodulated): a broad
@@ -106,7 +107,7 @@ void main() {
         float cos_l = max(dot(n, ls.dir), 0.0);
         if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
             float w = mis_power(ls.pdf, cos_l * INV_PI);
-            l_sum += ls.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l)) * w;
+            l_sum += ls.weight * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, ls.dir) * w;
             if (rough) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
         }
     }
@@ -115,7 +116,7 @@ void main() {
     vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
     float pdf = max(dot(n, dir), 0.0) * INV_PI;
     if (dot(dir, ng) > 0.0 && pdf > 0.0) {
-        vec3 lobe = 1.0 - brdf_specular_albedo(m, dot(n, dir));
+        vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.

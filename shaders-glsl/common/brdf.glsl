@@ -1,11 +1,17 @@
-// The one material model: glTF metallic-roughness as Lambert diffuse plus a GGX specular lobe
-// with height-correlated Smith visibility and Schlick Fresnel. Every pass and the reference
-// path tracer evaluate light through these functions.
+// The one material model: glTF metallic-roughness, Lambert diffuse plus a GGX specular lobe with
+// height-correlated Smith visibility and Schlick Fresnel. Every pass and the reference path
+// tracer evaluate light through these functions; src/render/brdf.rs mirrors them on the CPU.
 //
-// The lobes are coupled through the specular lobe's directional albedo E (src/render/brdf.rs,
-// which computes the table and mirrors this file on the CPU): the diffuse lobe is weighted by
-// (1 - E(v)) (1 - E(l)) / (1 - E_avg), reciprocal and energy-conserving, where the common
-// 1 - F(v.h) weighting reflects more than 1 at grazing angles.
+// How the two lobes share the light is the model (brdf_model, src/render/brdf.rs BrdfModel):
+// - BRDF_MODEL_GLTF (the default): glTF 2.0 Appendix B exactly. The dielectric is
+//   fresnel_mix(Lambert, GGX) with F = 0.04 + 0.96 (1 - |v.h|)^5, the metal is the GGX layer
+//   with Schlick Fresnel on baseColor, and the material is their mix by metallic. Its specular
+//   part is one GGX lobe with Schlick Fresnel at F0 = mix(0.04, baseColor, metallic); its
+//   diffuse part is baseColor (1 - metallic) / pi weighted by 1 - F_dielectric(v.h).
+// - BRDF_MODEL_COUPLED: the diffuse lobe weighted by (1 - E(v)) (1 - E(l)) / (1 - E_avg), E the
+//   specular lobe's directional albedo (a table): reciprocal and energy-conserving, where the
+//   specification's weighting reflects more than it receives at grazing views of glossy white
+//   dielectrics (1.2 at a view cosine of 0.2, roughness 0.3).
 #ifndef BRDF_GLSL
 #define BRDF_GLSL
 
@@ -13,10 +19,17 @@
 #include "sampling.glsl"
 #include "color.glsl"
 
-// (A, B) with E(mu, roughness; F0) = F0 A + B over a 32 x 32 grid (roughness rows of view
-// cosines), then 32 cosine-weighted averages per roughness.
+#define BRDF_MODEL_GLTF 0u
+#define BRDF_MODEL_COUPLED 1u
+
+// The model, then (A, B) with E(mu, roughness; F0) = F0 A + B over a 32 x 32 grid (roughness
+// rows of view cosines), then 32 cosine-weighted averages per roughness.
 #define BRDF_TABLE_SIZE 32
-layout(set = 0, binding = 17, scalar) readonly buffer BrdfEnergy { vec2 brdf_energy[]; };
+layout(set = 0, binding = 17, scalar) readonly buffer BrdfData {
+    uint brdf_model;
+    uint brdf_reserved;
+    vec2 brdf_energy[];
+};
 
 // Roughness below this is treated as this (a perfect mirror has no finite GGX density).
 #define MIN_ALPHA 1e-3
@@ -79,6 +92,22 @@ vec3 brdf_specular_albedo_avg(BrdfInput m) {
     return brdf_f0(m) * ab.x + ab.y;
 }
 
+// The dielectric's Fresnel (IOR 1.5) at cosine v.h, which splits light between the glTF model's
+// diffuse and specular layers.
+float fresnel_dielectric(float v_dot_h) { return 0.04 + 0.96 * pow(1.0 - clamp(v_dot_h, 0.0, 1.0), 5.0); }
+
+// The diffuse lobe divided by Lambert's brdf_diffuse_albedo / pi: the weight the model gives
+// diffuse light arriving from l and leaving toward v. The gi pass integrates incident light
+// with it and composite multiplies by the albedo alone, so the demodulated diffuse signal is
+// exact for either model.
+vec3 brdf_diffuse_weight(BrdfInput m, vec3 n, vec3 v, vec3 l) {
+    if (brdf_model == BRDF_MODEL_COUPLED) {
+        return (1.0 - brdf_specular_albedo(m, max(dot(n, v), 0.0))) * (1.0 - brdf_specular_albedo(m, max(dot(n, l), 0.0))) /
+               max(1.0 - brdf_specular_albedo_avg(m), vec3(1e-4));
+    }
+    return vec3(1.0 - fresnel_dielectric(dot(v, normalize(v + l))));
+}
+
 // The specular lobe alone: f_spec(v, l) * cos(theta_l).
 vec3 brdf_eval_specular_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
     float n_dot_l = dot(n, l);
@@ -99,9 +128,7 @@ vec3 brdf_eval_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
     float alpha = ggx_alpha(m.roughness);
     vec3 f = fresnel_schlick(brdf_f0(m), dot(v, h));
     vec3 spec = f * ggx_d(max(dot(n, h), 0.0), alpha) * smith_visibility(n_dot_l, n_dot_v, alpha);
-    vec3 coupling = (1.0 - brdf_specular_albedo(m, n_dot_v)) * (1.0 - brdf_specular_albedo(m, n_dot_l)) /
-                    max(1.0 - brdf_specular_albedo_avg(m), vec3(1e-4));
-    vec3 diff = brdf_diffuse_albedo(m) * INV_PI * coupling;
+    vec3 diff = brdf_diffuse_albedo(m) * INV_PI * brdf_diffuse_weight(m, n, v, l);
     return (diff + spec) * n_dot_l;
 }
 
@@ -124,9 +151,10 @@ float ggx_vndf_pdf(float n_dot_v, float n_dot_h, float alpha) {
 }
 
 // Probability of drawing from the specular lobe: the lobes' weights at normal-ish incidence,
-// Fresnel for the specular one and (1 - Fresnel) * diffuse albedo for the diffuse one. Only a
-// variance choice; any value in (0, 1] for a lobe that can contribute keeps the estimate
-// unbiased. A lobe that cannot contribute (diffuse of a metal) gets probability 0.
+// Fresnel for the specular one and (1 - Fresnel) * diffuse albedo for the diffuse one (either
+// model). Only a variance choice: brdf_pdf is the same mixture, and any value in (0, 1) for
+// lobes that can both contribute keeps the estimate unbiased. A lobe that cannot contribute
+// (diffuse of a metal) gets probability 0.
 float brdf_spec_probability(BrdfInput m, float n_dot_v) {
     vec3 f = fresnel_schlick(brdf_f0(m), n_dot_v);
     float s = luminance(f);

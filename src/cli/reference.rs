@@ -39,6 +39,9 @@ pub struct ReferenceArgs {
     force: bool,
     #[command(flatten)]
     environment: EnvironmentArgs,
+    /// Material model: `gltf` (glTF 2.0 Appendix B) or `coupled` (energy-coupled diffuse).
+    #[arg(long, value_enum, default_value_t)]
+    brdf: crate::render::brdf::BrdfModel,
     /// Scattering events per path at most; 1 renders direct light only. Russian roulette ends
     /// paths well before the default, which only guards against endless paths.
     #[arg(long, default_value_t = 256)]
@@ -78,6 +81,7 @@ pub fn run(a: &ReferenceArgs) -> Result<()> {
         start_time: a.time,
         environment,
         mode: RenderMode::Reference { seed: a.seed, max_bounces: a.max_bounces },
+        brdf: a.brdf,
         ..Default::default()
     };
     let camera = a.camera.clone().unwrap_or_default();

@@ -53,6 +53,9 @@ pub struct RenderArgs {
     seed: Option<u32>,
     #[command(flatten)]
     environment: EnvironmentArgs,
+    /// Material model: `gltf` (glTF 2.0 Appendix B) or `coupled` (energy-coupled diffuse).
+    #[arg(long, value_enum, default_value_t)]
+    brdf: crate::render::brdf::BrdfModel,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -102,6 +105,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         denoiser: !a.no_denoise,
         full: a.full,
         environment: a.environment.environment(),
+        brdf: a.brdf,
         ..Default::default()
     };
     if let Some(b) = a.gi_bounces {

@@ -1,9 +1,14 @@
-//! The material model on the CPU: the Lambert + GGX lobes of shaders-glsl/common/brdf.glsl, and
-//! the specular directional-albedo table the shader reads to couple them.
+//! The material model on the CPU: the Lambert + GGX lobes of shaders-glsl/common/brdf.glsl, the
+//! choice of how they share light (`BrdfModel`), and the specular directional-albedo table the
+//! shader reads for the energy-coupled model.
 //!
-//! Why the table: a Lambert lobe weighted by 1 - F(v.h) next to a GGX lobe weighted by F(v.h)
-//! reflects more light than it receives at grazing angles (a white dielectric returned 1.2 of
-//! the incident light at a view cosine of 0.2). Here the diffuse lobe is instead weighted by
+//! The default is glTF 2.0 Appendix B as written: `fresnel_mix` of Lambert and GGX for the
+//! dielectric (the diffuse lobe weighted by 1 - F(v.h), F = 0.04 + 0.96 (1 - v.h)^5), the GGX
+//! layer with Schlick Fresnel on baseColor for the metal, mixed by metallic. That is what other
+//! glTF renderers compute, so images agree with theirs; it is not energy-conserving: a glossy
+//! white dielectric reflects up to 1.2 of the incident light at a view cosine of 0.2.
+//!
+//! The energy-coupled model (`--brdf coupled`) weights the diffuse lobe instead by
 //! (1 - E(v)) (1 - E(l)) / (1 - E_avg), E the specular lobe's directional albedo and E_avg its
 //! cosine-weighted average: the lobe stays reciprocal, and the diffuse energy for a view v is
 //! exactly albedo (1 - E(v)), so a white dielectric reflects exactly what the specular lobe
@@ -14,6 +19,39 @@
 
 use glam::DVec3;
 use std::f64::consts::PI;
+
+/// How the diffuse and specular lobes share light (`--brdf`; brdf.glsl `brdf_model`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BrdfModel {
+    /// glTF 2.0 Appendix B: fresnel_mix(Lambert, GGX) for the dielectric, Schlick-Fresnel GGX
+    /// for the metal.
+    #[default]
+    Gltf,
+    /// Lambert weighted by the specular lobe's directional albedo at both directions:
+    /// reciprocal and energy-conserving.
+    Coupled,
+}
+
+impl BrdfModel {
+    /// The value of brdf.glsl's `brdf_model` (BRDF_MODEL_*).
+    fn shader_value(self) -> u32 {
+        match self {
+            BrdfModel::Gltf => 0,
+            BrdfModel::Coupled => 1,
+        }
+    }
+}
+
+/// The contents of the shader's BrdfData buffer (set 0, binding 17): the model, a reserved
+/// word, then `energy_table()`.
+pub fn gpu_data(model: BrdfModel) -> Vec<u8> {
+    let mut data = Vec::with_capacity(8 + std::mem::size_of_val(energy_table()));
+    data.extend_from_slice(&model.shader_value().to_le_bytes());
+    data.extend_from_slice(&0u32.to_le_bytes());
+    data.extend_from_slice(bytemuck::cast_slice(energy_table()));
+    data
+}
 
 /// Entries per axis: view cosine mu = i / (N - 1) (the shader clamps to >= 1e-4), roughness
 /// r = j / (N - 1).
@@ -139,8 +177,22 @@ impl Brdf {
         self.f0() * a + DVec3::splat(b)
     }
 
+    /// The diffuse lobe divided by albedo / pi for the pair (v, l): the shader's
+    /// `brdf_diffuse_weight`.
+    pub fn diffuse_weight(&self, model: BrdfModel, n: DVec3, v: DVec3, l: DVec3) -> DVec3 {
+        match model {
+            BrdfModel::Gltf => DVec3::splat(1.0 - fresnel_dielectric(v.dot((v + l).normalize()))),
+            BrdfModel::Coupled => {
+                let table = energy_table();
+                (DVec3::ONE - self.specular_albedo(table, n.dot(v).max(0.0)))
+                    * (DVec3::ONE - self.specular_albedo(table, n.dot(l).max(0.0)))
+                    / (DVec3::ONE - self.specular_albedo_avg(table)).max(DVec3::splat(1e-4))
+            }
+        }
+    }
+
     /// f(v, l) cos(theta_l), the shader's `brdf_eval_cos`.
-    pub fn eval_cos(&self, table: &[[f32; 2]], n: DVec3, v: DVec3, l: DVec3) -> DVec3 {
+    pub fn eval_cos(&self, model: BrdfModel, n: DVec3, v: DVec3, l: DVec3) -> DVec3 {
         let (nl, nv) = (n.dot(l), n.dot(v));
         if nl <= 0.0 || nv <= 0.0 {
             return DVec3::ZERO;
@@ -153,11 +205,14 @@ impl Brdf {
         let nh = n.dot(h).max(0.0);
         let d = a2 / (PI * (nh * nh * (a2 - 1.0) + 1.0).powi(2));
         let vis = 0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
-        let coupling = (DVec3::ONE - self.specular_albedo(table, nv)) * (DVec3::ONE - self.specular_albedo(table, nl))
-            / (DVec3::ONE - self.specular_albedo_avg(table)).max(DVec3::splat(1e-4));
-        let diffuse = self.base * (1.0 - self.metallic) / PI * coupling;
+        let diffuse = self.base * (1.0 - self.metallic) / PI * self.diffuse_weight(model, n, v, l);
         (diffuse + f * d * vis) * nl
     }
+}
+
+/// The dielectric's Fresnel (IOR 1.5, F0 = 0.04) at cosine `v_dot_h`.
+fn fresnel_dielectric(v_dot_h: f64) -> f64 {
+    0.04 + 0.96 * (1.0 - v_dot_h.clamp(0.0, 1.0)).powi(5)
 }
 
 /// Bilinear (A, B) at view cosine `mu` and `roughness`, as the shader interpolates.
@@ -182,7 +237,7 @@ mod tests {
 
     /// E(mu) = integral of f cos over the hemisphere, by midpoint quadrature in (t, phi) with
     /// z = cos(theta) = t^2, which puts nodes where grazing lobes live.
-    fn albedo(b: &Brdf, table: &[[f32; 2]], mu: f64) -> DVec3 {
+    fn albedo(b: &Brdf, model: BrdfModel, mu: f64) -> DVec3 {
         let v = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
         // Grazing views have lobes narrow in azimuth: phi needs the finer grid.
         let (nt, nphi) = (500, 1500);
@@ -194,20 +249,19 @@ mod tests {
             for k in 0..nphi {
                 let phi = 2.0 * PI * (k as f64 + 0.5) / nphi as f64;
                 // dz = 2 t dt
-                sum += b.eval_cos(table, DVec3::Z, v, DVec3::new(r * phi.cos(), r * phi.sin(), z)) * 2.0 * t;
+                sum += b.eval_cos(model, DVec3::Z, v, DVec3::new(r * phi.cos(), r * phi.sin(), z)) * 2.0 * t;
             }
         }
         sum * 2.0 * PI / (nt * nphi) as f64
     }
 
     #[test]
-    fn white_materials_never_reflect_more_than_they_receive() {
-        let table = energy_table();
+    fn coupled_white_materials_never_reflect_more_than_they_receive() {
         for metallic in [0.0, 0.5, 1.0] {
             for roughness in [0.05, 0.3, 0.6, 1.0] {
                 let b = Brdf { base: DVec3::ONE, metallic, roughness };
                 for mu in [0.05, 0.2, 0.5, 1.0] {
-                    let e = albedo(&b, table, mu).x;
+                    let e = albedo(&b, BrdfModel::Coupled, mu).x;
                     // Quadrature of a sharp lobe is noisy at low roughness: 1% slack.
                     assert!(e <= 1.01, "metallic {metallic} roughness {roughness} mu {mu}: albedo {e}");
                     if metallic == 0.0 && roughness >= 0.3 {
@@ -220,13 +274,76 @@ mod tests {
         }
     }
 
+    /// glTF 2.0 Appendix B transcribed term by term: specular_brdf = V D (height-correlated
+    /// Smith V),
+    /// diffuse_brdf = baseColor / pi, metal_brdf = conductor_fresnel(baseColor, specular_brdf),
+    /// dielectric_brdf = fresnel_mix(1.5, diffuse_brdf, specular_brdf), material =
+    /// mix(dielectric_brdf, metal_brdf, metallic).
+    fn appendix_b(b: &Brdf, n: DVec3, v: DVec3, l: DVec3) -> DVec3 {
+        let h = (v + l).normalize();
+        let alpha = b.roughness * b.roughness;
+        let a2 = alpha * alpha;
+        let (nl, nv, nh, vh) = (n.dot(l).abs(), n.dot(v).abs(), n.dot(h), v.dot(h).abs());
+        let d = a2 / (PI * (nh * nh * (a2 - 1.0) + 1.0).powi(2));
+        // Height-correlated Smith visibility G2 / (4 |n.l| |n.v|).
+        let vis = 0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
+        let specular_brdf = vis * d;
+        let diffuse_brdf = b.base / PI;
+        let metal = specular_brdf * (b.base + (DVec3::ONE - b.base) * (1.0 - vh).powi(5));
+        let fr = 0.04 + 0.96 * (1.0 - vh).powi(5);
+        let dielectric = diffuse_brdf * (1.0 - fr) + DVec3::splat(specular_brdf * fr);
+        (dielectric * (1.0 - b.metallic) + metal * b.metallic) * nl
+    }
+
+    #[test]
+    fn gltf_model_is_appendix_b() {
+        let materials = [
+            Brdf { base: DVec3::new(0.8, 0.5, 0.2), metallic: 0.0, roughness: 0.4 },
+            Brdf { base: DVec3::new(0.9, 0.6, 0.3), metallic: 1.0, roughness: 0.25 },
+            Brdf { base: DVec3::new(0.3, 0.7, 0.9), metallic: 0.4, roughness: 0.8 },
+            Brdf { base: DVec3::ONE, metallic: 0.0, roughness: 1.0 },
+        ];
+        let dirs = [
+            DVec3::new(0.3, 0.1, 0.9),
+            DVec3::new(-0.7, 0.2, 0.4),
+            DVec3::new(0.9, -0.3, 0.15),
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(-0.2, -0.9, 0.3),
+        ];
+        for b in materials {
+            for v in dirs {
+                for l in dirs {
+                    let (v, l) = (v.normalize(), l.normalize());
+                    let (got, want) = (b.eval_cos(BrdfModel::Gltf, DVec3::Z, v, l), appendix_b(&b, DVec3::Z, v, l));
+                    assert!(
+                        (got - want).length() <= 1e-9 * (1.0 + want.length()),
+                        "{b:?} v {v} l {l}: {got} != {want}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn the_diffuse_lobe_is_reciprocal() {
-        let table = energy_table();
         let b = Brdf { base: DVec3::new(0.8, 0.5, 0.2), metallic: 0.2, roughness: 0.4 };
         let (v, l) = (DVec3::new(0.3, 0.1, 0.9).normalize(), DVec3::new(-0.7, 0.2, 0.4).normalize());
-        let (fvl, flv) = (b.eval_cos(table, DVec3::Z, v, l) / l.z, b.eval_cos(table, DVec3::Z, l, v) / v.z);
-        assert!((fvl - flv).length() < 1e-9, "f(v,l) {fvl} != f(l,v) {flv}");
+        for model in [BrdfModel::Gltf, BrdfModel::Coupled] {
+            let (fvl, flv) = (b.eval_cos(model, DVec3::Z, v, l) / l.z, b.eval_cos(model, DVec3::Z, l, v) / v.z);
+            assert!((fvl - flv).length() < 1e-9, "{model:?}: f(v,l) {fvl} != f(l,v) {flv}");
+        }
+    }
+
+    #[test]
+    fn gltf_white_dielectric_is_not_energy_conserving_at_grazing_views() {
+        // What the specification's fresnel_mix does (and why `coupled` exists): a glossy white
+        // dielectric seen at grazing angles reflects more than it receives, a rough one a
+        // little less than all.
+        let glossy = Brdf { base: DVec3::ONE, metallic: 0.0, roughness: 0.3 };
+        let rough = Brdf { base: DVec3::ONE, metallic: 0.0, roughness: 1.0 };
+        let (g, r) = (albedo(&glossy, BrdfModel::Gltf, 0.2).x, albedo(&rough, BrdfModel::Gltf, 1.0).x);
+        assert!(g > 1.1, "glossy white dielectric at mu 0.2: albedo {g}");
+        assert!(r < 0.99 && r > 0.95, "rough white dielectric at mu 1: albedo {r}");
     }
 
     #[test]

@@ -58,6 +58,8 @@ pub struct Settings {
     /// Tests: a CPU-provided image `inject.signal` goes through an SVGF chain of its own.
     pub test_signal: bool,
     pub mode: RenderMode,
+    /// How the material's diffuse and specular lobes share light (`--brdf`).
+    pub brdf: brdf::BrdfModel,
 }
 
 /// Which frame the renderer builds.
@@ -96,6 +98,7 @@ impl Default for Settings {
             shadows: Default::default(),
             test_signal: false,
             mode: RenderMode::Hybrid,
+            brdf: brdf::BrdfModel::Gltf,
         }
     }
 }
@@ -202,7 +205,7 @@ impl Renderer {
         let environment = environment::EnvironmentData::load(&settings.environment)?;
         let pool = CommandPool::new(ctx)?;
         let pose = scene.evaluate(settings.start_time);
-        let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment)?;
+        let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment, settings.brdf)?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
         let (frame_passes, injected, hdr_output) = frame_parts(&b, &settings, &plan)?;
         let extent = vk::Extent2D { width: settings.width, height: settings.height };

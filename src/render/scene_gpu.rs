@@ -36,8 +36,8 @@ pub mod binding {
     pub const EMITTER_BASE: u32 = 14;
     pub const ENV_TEXELS: u32 = 15;
     pub const ENV_CDF: u32 = 16;
-    /// The specular directional-albedo table that couples the BRDF's lobes (src/render/brdf.rs).
-    pub const BRDF_ENERGY: u32 = 17;
+    /// The material model and the specular directional-albedo table (src/render/brdf.rs).
+    pub const BRDF_DATA: u32 = 17;
 }
 
 #[repr(C)]
@@ -146,7 +146,7 @@ pub struct SceneGpu {
     pub set: DescriptorSet,
     pub accel: Box<dyn RayAccel>,
     pub light_tables: LightTables,
-    _brdf_energy: Buffer,
+    _brdf_data: Buffer,
     prev_world: Option<Vec<Mat4>>,
     deformer: Option<super::deform::Deformer>,
 }
@@ -163,6 +163,7 @@ impl SceneGpu {
         pose: &Pose,
         backend: Backend,
         environment: &EnvironmentData,
+        brdf: super::brdf::BrdfModel,
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Acceleration-structure builds read the geometry by device address.
@@ -237,13 +238,7 @@ impl SceneGpu {
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
         let light_tables = LightTables::new(ctx, pool, scene, pose, environment)?;
-        let brdf_energy = gpu::upload::device_buffer(
-            ctx,
-            pool,
-            "brdf_energy",
-            bytemuck::cast_slice(super::brdf::energy_table()),
-            storage,
-        )?;
+        let brdf_data = gpu::upload::device_buffer(ctx, pool, "brdf_data", &super::brdf::gpu_data(brdf), storage)?;
         let set_layout = DescriptorSetLayout::new(ctx, &bindings, false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;
         set.write_buffer(binding::FRAME, BindingKind::UniformBuffer, &frame);
@@ -256,7 +251,7 @@ impl SceneGpu {
         set.write_sampled_images(binding::TEXTURES, &texture_bindings);
         accel.write_set(&set);
         light_tables.write_set(&set);
-        set.write_buffer(binding::BRDF_ENERGY, BindingKind::StorageBuffer, &brdf_energy);
+        set.write_buffer(binding::BRDF_DATA, BindingKind::StorageBuffer, &brdf_data);
 
         let mut gpu = Self {
             vertices,
@@ -274,7 +269,7 @@ impl SceneGpu {
             set,
             accel,
             light_tables,
-            _brdf_energy: brdf_energy,
+            _brdf_data: brdf_data,
             prev_world: None,
             deformer,
         };
@@ -350,7 +345,7 @@ fn scene_bindings(texture_count: u32) -> Vec<Binding> {
         b(binding::MATERIALS, BindingKind::StorageBuffer),
         b(binding::LIGHTS, BindingKind::StorageBuffer),
         Binding { binding: binding::TEXTURES, kind: BindingKind::SampledImage, count: texture_count },
-        b(binding::BRDF_ENERGY, BindingKind::StorageBuffer),
+        b(binding::BRDF_DATA, BindingKind::StorageBuffer),
     ]
 }
 

@@ -12,8 +12,9 @@
 //!   the reference path tracer at the same size.
 //!
 //! The reference is cached on disk (`CACHE/reference/<scene hash>-<camera>-<WxH>-<spp>spp-
-//! <bounces>b.exr` with a JSON sidecar), keyed by a hash of the scene's bytes (the file and the
-//! buffers and images it names), the camera, the size, the sample count and the path length.
+//! <bounces>b-<brdf>.exr` with a JSON sidecar), keyed by a hash of the scene's bytes (the file and
+//! the buffers and images it names), the camera, the size, the sample count, the path length
+//! and the material model (the default one, which both the reference and the frames use).
 //! It is the mean of two independent halves (different seeds, spp/2 samples each); the FLIP
 //! between the halves is kept as the reference's noise floor: an error near it is not
 //! resolved by the reference.
@@ -182,7 +183,8 @@ fn reference(
     let start = Instant::now();
     let (w, h) = (opts.width, opts.height);
     let camera = camera_key(&opts.camera);
-    let stem = format!("{scene_hash}-{camera}-{w}x{h}-{}spp-{}b", opts.reference_spp, opts.reference_bounces);
+    let brdf = format!("{:?}", crate::render::brdf::BrdfModel::default()).to_lowercase();
+    let stem = format!("{scene_hash}-{camera}-{w}x{h}-{}spp-{}b-{brdf}", opts.reference_spp, opts.reference_bounces);
     let dir = opts.cache_dir.join("reference");
     let (exr, sidecar) = (dir.join(format!("{stem}.exr")), dir.join(format!("{stem}.json")));
     let info = |cached, made| ReferenceInfo {
