@@ -20,6 +20,8 @@
 //!
 //! Each sweep is also cached for `hybrid-rt render --target-ms / --target-error`
 //! (`CACHE/sweep/<scene hash>-<camera>-<WxH>-<backend>-<device>.json`, the latest run wins).
+//! A scene lit by the default light (src/render/default_light.rs) has `-daylight` after its
+//! hash in both keys, so results with and without it never stand in for each other.
 
 use super::target::{self, Measured, Target};
 use super::{median, slug};
@@ -28,7 +30,7 @@ use crate::gpu::{Context, ShaderLibrary};
 use crate::image_io::{self, CpuImage, Texels};
 use crate::metrics::{self, DisplayTransform, HdrFlipOptions};
 use crate::passes::pathtrace;
-use crate::render::{CameraChoice, RenderMode, Renderer, Settings};
+use crate::render::{CameraChoice, Environment, RenderMode, Renderer, Settings, default_light};
 use crate::scene::Scene;
 use anyhow::{Context as _, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -189,6 +191,9 @@ pub struct Options {
     pub camera: CameraChoice,
     /// Where references and sweep results are cached (`out/cache` by default).
     pub cache_dir: PathBuf,
+    /// What lights the scene from outside: `Environment::DefaultLight` or black (both the
+    /// reference and every configuration).
+    pub environment: Environment,
     /// Render the reference again even when a cached one exists (and replace it).
     pub fresh_reference: bool,
 }
@@ -351,6 +356,12 @@ pub fn scene_hash(spec: &str) -> Result<String> {
     Ok(format!("{:016x}", h.0))
 }
 
+/// The scene as it appears in cache keys: its content hash, marked when the default light
+/// lights it.
+pub fn lit_scene_key(hash: String, default_light: bool) -> String {
+    if default_light { format!("{hash}-daylight") } else { hash }
+}
+
 /// The camera as it appears in cache keys.
 pub fn camera_key(c: &CameraChoice) -> String {
     match c {
@@ -425,6 +436,7 @@ fn reference(
             width: w,
             height: h,
             mode: RenderMode::Reference { seed, max_bounces: opts.reference_bounces },
+            environment: opts.environment.clone(),
             ..Default::default()
         };
         let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
@@ -482,7 +494,13 @@ fn run_config(
     config: Config,
     bar: &indicatif::ProgressBar,
 ) -> Result<Run> {
-    let mut settings = Settings { width: opts.width, height: opts.height, frame_dt: 0.0, ..Default::default() };
+    let mut settings = Settings {
+        width: opts.width,
+        height: opts.height,
+        frame_dt: 0.0,
+        environment: opts.environment.clone(),
+        ..Default::default()
+    };
     config.apply(&mut settings);
     let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
     let mut totals = Vec::new();
@@ -553,7 +571,7 @@ pub fn sweep_scene(
         );
     }
     let start = Instant::now();
-    let hash = scene_hash(spec)?;
+    let hash = lit_scene_key(scene_hash(spec)?, default_light::choose(&opts.environment, scene).default_light);
     let (reference, reference_info) = reference(ctx, shaders, spec, scene, backend, opts, &hash)?;
     let rounds = opts.rounds.max(1);
     let bar = crate::cli::progress_bar(opts.configs.len() as u64 * opts.frames as u64 * rounds as u64, "frames");
@@ -677,14 +695,19 @@ pub fn pick_for_render(
     backend: Backend,
     device: &str,
     goal: Target,
+    (scene, environment): (&Scene, &Environment),
 ) -> Result<(Config, String)> {
-    let hash = scene_hash(spec)?;
+    let lit = default_light::choose(environment, scene).default_light;
+    let hash = lit_scene_key(scene_hash(spec)?, lit);
     let cam = camera_key(camera);
     let path = sweep_cache_path(cache_dir, &hash, &cam, size, backend, device);
     if !path.is_file() {
         let (w, h) = size;
-        let camera_arg =
+        let mut camera_arg =
             if matches!(camera, CameraChoice::Default) { String::new() } else { format!(" --camera {cam}") };
+        if !lit && default_light::choose(&Environment::DefaultLight, scene).default_light {
+            camera_arg += " --no-default-light";
+        }
         let mut msg = format!(
             "no speed/accuracy sweep of {spec} at {w}x{h} ({} backend, {cam} camera) on {device} in {}; \
              make one with: hybrid-rt bench sweep {spec} --size {w}x{h}{camera_arg} --backend {}",

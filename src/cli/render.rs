@@ -127,6 +127,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             picked,
             &ctx.caps.device_name,
             target,
+            (&scene, &settings.environment),
         )?;
         config.apply(&mut settings);
         println!("configuration {why}");
