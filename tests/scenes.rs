@@ -9,14 +9,14 @@
 
 mod common;
 
+use glam::{Quat, Vec3};
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes::gbuffer::NO_ID;
-use hybrid_rt::passes::pathtrace;
 use hybrid_rt::passes::gi::GiSettings;
+use hybrid_rt::passes::pathtrace;
 use hybrid_rt::render::{self, CameraChoice, Environment, RenderMode, Renderer, Settings, View};
 use hybrid_rt::scene::{Instance, LoadOptions, Material, Node, Scene, builtin, load_gltf};
-use glam::{Quat, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -28,10 +28,14 @@ const FRAMES: u32 = 6;
 /// few percent at this count.
 const REFERENCE_SPP: u32 = 8;
 /// The hybrid frame's mean surface luminance must lie within this factor of the reference's,
-/// either way. It models one GI bounce and denoises one sample per pixel, so it is not the
-/// reference, but a missing light, a black environment, a NaN or a doubled light are factors
-/// of 2 or more. Measured ratios (this machine, lavapipe) are printed by the test.
-const FACTOR: f64 = 1.5;
+/// either way. It denoises one sample per pixel, so it is not the reference, but a missing
+/// sun (71% of the default light on a horizontal surface), a doubled light (2) or a black
+/// environment (0) fall outside. Measured on
+/// this machine (lavapipe, 2026-12-01; the test prints them): 0.70 to 1.13 over the shared
+/// scenes and the default scene, lowest on DamagedHelmet (metals: the hybrid frame is 0.80
+/// of the reference there under a constant sky too, and the denoiser clamps some of the
+/// sun's rare glossy highlights: 0.76 with it off).
+const FACTOR: f64 = 1.6;
 /// Mean surface luminance below which a picture counts as black.
 const BLACK: f64 = 0.01;
 
@@ -99,9 +103,15 @@ impl Picture {
 /// `FRAMES` hybrid frames of `scene` at a frozen pose with environment `env`.
 fn hybrid(ctx: &Arc<Context>, scene: Scene, env: Environment) -> Picture {
     let settings = Settings { width: W, height: H, frame_dt: 0.0, environment: env, ..Default::default() };
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, common::auto_backend(ctx))
-            .unwrap();
+    let mut r = Renderer::new(
+        ctx,
+        &ShaderLibrary::embedded(),
+        scene,
+        settings,
+        &CameraChoice::Default,
+        common::auto_backend(ctx),
+    )
+    .unwrap();
     for _ in 0..FRAMES {
         r.render_frame().unwrap();
     }
@@ -122,9 +132,15 @@ fn reference(ctx: &Arc<Context>, scene: Scene, env: Environment, like: &Picture)
         mode: RenderMode::Reference { seed: 3, max_bounces: 1 + GiSettings::default().bounces },
         ..Default::default()
     };
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, common::auto_backend(ctx))
-            .unwrap();
+    let mut r = Renderer::new(
+        ctx,
+        &ShaderLibrary::embedded(),
+        scene,
+        settings,
+        &CameraChoice::Default,
+        common::auto_backend(ctx),
+    )
+    .unwrap();
     for _ in 0..REFERENCE_SPP {
         r.render_frame().unwrap();
     }
@@ -208,7 +224,13 @@ fn lightless_scene() -> Scene {
     s.meshes.push(builtin::uv_sphere(0.8, 32, 16, 1));
     s.meshes.push(builtin::quad(Vec3::new(1.2, 0.01, 0.8), Vec3::X * 0.4, Vec3::NEG_Z * 0.4, 2));
     for (i, t) in [Vec3::ZERO, Vec3::new(0.0, 0.8, 0.0), Vec3::ZERO].into_iter().enumerate() {
-        s.nodes.push(Node { name: format!("n{i}"), parent: None, translation: t, rotation: Quat::IDENTITY, scale: Vec3::ONE });
+        s.nodes.push(Node {
+            name: format!("n{i}"),
+            parent: None,
+            translation: t,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+        });
         s.instances.push(Instance { mesh: i as u32, node: i as u32 });
     }
     s

@@ -686,16 +686,16 @@ pub fn table(s: &SceneSweep) -> String {
 }
 
 /// For `render --target-ms / --target-error`: the configuration picked from the cached sweep
-/// of this scene, camera, size, backend and device, and why.
+/// of this scene (as named on the command line, loaded, and lit by `environment`), camera,
+/// size, backend and device, and why.
 pub fn pick_for_render(
     cache_dir: &Path,
-    spec: &str,
+    (spec, scene, environment): (&str, &Scene, &Environment),
     camera: &CameraChoice,
     size: (u32, u32),
     backend: Backend,
     device: &str,
     goal: Target,
-    (scene, environment): (&Scene, &Environment),
 ) -> Result<(Config, String)> {
     let lit = default_light::choose(environment, scene).default_light;
     let hash = lit_scene_key(scene_hash(spec)?, lit);

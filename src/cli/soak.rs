@@ -50,7 +50,8 @@ pub fn run(a: &SoakArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     // The frame `hybrid-rt render` makes by default (TAA on).
-    let settings = Settings { width, height, taa: true, environment: a.environment.environment(), ..Default::default() };
+    let settings =
+        Settings { width, height, taa: true, environment: a.environment.environment(), ..Default::default() };
     let shaders = ShaderLibrary::embedded();
     let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &CameraChoice::Default, picked)?;
     let bar = super::progress_bar(a.frames as u64, "frames");

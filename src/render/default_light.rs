@@ -68,7 +68,9 @@ fn own_light(scene: &Scene) -> Result<String, String> {
     if emission >= SIGNIFICANT_EMISSION {
         Ok(format!("its emitters light it ({what}, at least {SIGNIFICANT_EMISSION})"))
     } else {
-        Err(format!("the scene has no punctual lights and its emitters are too weak to light it ({what}, under {SIGNIFICANT_EMISSION})"))
+        Err(format!(
+            "the scene has no punctual lights and its emitters are too weak to light it ({what}, under {SIGNIFICANT_EMISSION})"
+        ))
     }
 }
 
@@ -129,7 +131,11 @@ mod tests {
     fn lamp_scene(emission: f32) -> Scene {
         let mut s = Scene::default();
         s.materials.push(Material { name: "floor".into(), ..Default::default() });
-        s.materials.push(Material { name: "lamp".into(), emissive_factor: Vec3::splat(emission), ..Default::default() });
+        s.materials.push(Material {
+            name: "lamp".into(),
+            emissive_factor: Vec3::splat(emission),
+            ..Default::default()
+        });
         s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0, 0));
         s.meshes.push(builtin::quad(Vec3::Y, Vec3::X, Vec3::Z, 1));
         s.nodes.push(Node {
