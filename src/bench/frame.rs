@@ -48,19 +48,18 @@ pub struct FrameCost {
     pub wall_ms: f64,
 }
 
-/// Renders `warmup + frames` frames of `scene` (the default frame: TAA and denoiser on; the
-/// frame plan unless `full`), then `frames` more of each kind, unprofiled and profiled, and
-/// takes the medians.
+/// Renders `warmup + frames` frames of `scene` with `settings` (`bench frame`: the default
+/// frame, TAA and denoiser on, the frame plan unless `--full`), then `frames` more of each
+/// kind, unprofiled and profiled, and takes the medians.
 pub fn measure(
     ctx: &Arc<Context>,
     shaders: &ShaderLibrary,
     scene: Scene,
     backend: Backend,
-    (width, height): (u32, u32),
-    full: bool,
+    settings: Settings,
     (warmup, frames): (u32, u32),
 ) -> Result<FrameCost> {
-    let settings = Settings { width, height, taa: true, full, ..Default::default() };
+    let (width, height) = (settings.width, settings.height);
     let mut r = Renderer::new(ctx, shaders, scene, settings, &CameraChoice::Default, backend)?;
     for _ in 0..warmup {
         r.render_frame()?;

@@ -159,6 +159,10 @@ struct SweepArgs {
     /// Render the reference again even when it is cached (and replace the cached one).
     #[arg(long)]
     fresh_reference: bool,
+    /// No default light: scenes without punctual lights or significant emitters stay black but
+    /// for their emission (by default a daylight sky lights them, reference and frames alike).
+    #[arg(long)]
+    no_default_light: bool,
     /// Scene camera by name or index (default: the first camera, or a framing camera).
     #[arg(long)]
     camera: Option<CameraChoice>,
@@ -228,6 +232,11 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
                 camera: a.camera.clone().unwrap_or_default(),
                 cache_dir: a.cache_dir.clone(),
                 fresh_reference: a.fresh_reference,
+                environment: if a.no_default_light {
+                    crate::render::Environment::Constant(glam::Vec3::ZERO)
+                } else {
+                    crate::render::Environment::DefaultLight
+                },
             };
             let s = sweep::sweep_scene(&ctx, &shaders, spec, scene, backend, &opts)?;
             let (png, svg) = chart.next().expect("one chart per scene and size");

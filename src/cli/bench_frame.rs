@@ -1,7 +1,7 @@
 //! `hybrid-rt bench frame`: where the default frame's time goes, pass by pass, at the sizes
 //! asked for (src/bench/frame.rs).
 
-use super::{GpuArgs, SceneArgs, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::backend;
 use crate::bench::{self, frame};
 use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
@@ -16,6 +16,8 @@ pub struct FrameArgs {
     scene: SceneArgs,
     #[command(flatten)]
     gpu: GpuArgs,
+    #[command(flatten)]
+    environment: EnvironmentArgs,
     /// Image sizes, WIDTHxHEIGHT, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "640x360,1920x1080")]
     sizes: Vec<String>,
@@ -49,7 +51,15 @@ pub fn run(a: &FrameArgs) -> Result<()> {
     let mut costs = Vec::new();
     for &size in &sizes {
         bar.set_message(format!("{}x{}", size.0, size.1));
-        costs.push(frame::measure(&ctx, &shaders, scene.clone(), picked, size, a.full, (a.warmup, a.frames))?);
+        let settings = crate::render::Settings {
+            width: size.0,
+            height: size.1,
+            taa: true,
+            full: a.full,
+            environment: a.environment.environment(),
+            ..Default::default()
+        };
+        costs.push(frame::measure(&ctx, &shaders, scene.clone(), picked, settings, (a.warmup, a.frames))?);
         bar.inc(1);
     }
     bar.finish_and_clear();

@@ -141,20 +141,25 @@ impl SceneArgs {
     }
 }
 
-/// The built-in default scene (assets/default/cornell.gltf).
-/// What lights the scene from outside (render and reference take the same flags, so a
-/// hybrid frame can be compared with its reference).
+/// What lights the scene from outside (render, reference, view, plan and the benches take the
+/// same flags, so a hybrid frame can be compared with its reference). Without any, a scene
+/// that brings no light of its own gets the default light (src/render/default_light.rs).
 #[derive(Args, Clone, Debug)]
 pub struct EnvironmentArgs {
-    /// Equirectangular environment map (.exr or .hdr; row 0 is straight up) lighting the scene.
-    #[arg(long, conflicts_with = "sky")]
+    /// Equirectangular environment map (.exr or .hdr; row 0 is straight up) lighting the scene,
+    /// in place of the default light.
+    #[arg(long, conflicts_with_all = ["sky", "no_default_light"])]
     env: Option<PathBuf>,
     /// Multiplier on the environment map's radiance.
     #[arg(long, default_value_t = 1.0, requires = "env")]
     env_intensity: f32,
-    /// Constant environment radiance R,G,B (black when neither this nor --env is given).
-    #[arg(long, value_parser = parse_rgb)]
+    /// Constant environment radiance R,G,B, in place of the default light.
+    #[arg(long, value_parser = parse_rgb, conflicts_with = "no_default_light")]
     sky: Option<glam::Vec3>,
+    /// No default light: a scene without punctual lights or significant emitters stays black
+    /// but for its emission (by default such a scene is lit by a daylight sky with a sun).
+    #[arg(long)]
+    no_default_light: bool,
 }
 
 impl EnvironmentArgs {
@@ -163,7 +168,8 @@ impl EnvironmentArgs {
         match (&self.env, self.sky) {
             (Some(path), _) => Environment::Map(path.clone(), self.env_intensity),
             (None, Some(c)) => Environment::Constant(c),
-            (None, None) => Environment::default(),
+            (None, None) if self.no_default_light => Environment::Constant(glam::Vec3::ZERO),
+            (None, None) => Environment::DefaultLight,
         }
     }
 }
@@ -179,6 +185,7 @@ fn parse_rgb(s: &str) -> Result<glam::Vec3, String> {
     }
 }
 
+/// The built-in default scene (assets/default/cornell.gltf).
 pub fn default_scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default/cornell.gltf")
 }

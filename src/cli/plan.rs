@@ -1,9 +1,10 @@
 //! `hybrid-rt plan [SCENE]`: the passes the frame will run for a scene, and why (the frame
-//! plan of src/render/plan.rs, which `render` uses unless `--full` is given).
+//! plan of src/render/plan.rs, which `render` uses unless `--full` is given), and what lights
+//! it from outside (the default light or not, src/render/default_light.rs).
 
-use super::SceneArgs;
-use crate::render::Settings;
+use super::{EnvironmentArgs, SceneArgs};
 use crate::render::plan::FramePlan;
+use crate::render::{Settings, default_light};
 use anyhow::Result;
 use clap::Args;
 
@@ -14,13 +15,22 @@ pub struct PlanArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    environment: EnvironmentArgs,
 }
 
 pub fn run(a: &PlanArgs) -> Result<()> {
     let scene = a.scene.load()?;
     let plan = FramePlan::for_scene(&scene, Settings::default().reflections.roughness_cutoff);
+    let lighting = default_light::choose(&a.environment.environment(), &scene);
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&plan)?);
+        #[derive(serde::Serialize)]
+        struct Out<'a> {
+            #[serde(flatten)]
+            plan: &'a FramePlan,
+            lighting: &'a default_light::Lighting,
+        }
+        println!("{}", serde_json::to_string_pretty(&Out { plan: &plan, lighting: &lighting })?);
         return Ok(());
     }
     println!(
@@ -44,6 +54,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     for r in &plan.reasons {
         println!("  - {r}");
     }
+    println!("  - lighting: {}", lighting.note);
     println!("(`hybrid-rt render --full` runs every pass)");
     Ok(())
 }

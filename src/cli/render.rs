@@ -125,7 +125,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         let cache = std::path::Path::new("out/cache");
         let (config, why) = bench::sweep::pick_for_render(
             cache,
-            &spec,
+            (&spec, &scene, &settings.environment),
             &camera,
             (width, height),
             picked,

@@ -1,7 +1,7 @@
 //! `hybrid-rt bench soak`: many frames of an animated scene, watching host and device memory
 //! and frame times (src/bench/soak.rs).
 
-use super::{GpuArgs, SceneArgs, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::backend;
 use crate::bench::{self, soak};
 use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
@@ -17,6 +17,8 @@ pub struct SoakArgs {
     scene: SceneArgs,
     #[command(flatten)]
     gpu: GpuArgs,
+    #[command(flatten)]
+    environment: EnvironmentArgs,
     /// Frames to render, warm-up included.
     #[arg(long, default_value_t = soak::Options::default().frames)]
     frames: u32,
@@ -48,7 +50,8 @@ pub fn run(a: &SoakArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     // The frame `hybrid-rt render` makes by default (TAA on).
-    let settings = Settings { width, height, taa: true, ..Default::default() };
+    let settings =
+        Settings { width, height, taa: true, environment: a.environment.environment(), ..Default::default() };
     let shaders = ShaderLibrary::embedded();
     let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &CameraChoice::Default, picked)?;
     let bar = crate::progress::progress_bar(a.frames as u64, "frames");

@@ -1,6 +1,6 @@
 //! `hybrid-rt view`: the desktop viewer (see src/app/).
 
-use super::{GpuArgs, SceneArgs, parse_size};
+use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::app::{self, ViewOptions, script};
 use crate::render::{self, CameraChoice, Settings};
 use anyhow::{Result, bail};
@@ -29,6 +29,8 @@ pub struct ViewArgs {
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
+    #[command(flatten)]
+    environment: EnvironmentArgs,
     /// Present without waiting for the display's refresh (toggle with V).
     #[arg(long)]
     no_vsync: bool,
@@ -76,7 +78,14 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     } else {
         None
     };
-    let settings = Settings { width, height, exposure: a.exposure, taa: !a.no_taa, ..Default::default() };
+    let settings = Settings {
+        width,
+        height,
+        exposure: a.exposure,
+        taa: !a.no_taa,
+        environment: a.environment.environment(),
+        ..Default::default()
+    };
     app::run(ViewOptions {
         scene,
         settings,

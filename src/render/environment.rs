@@ -15,12 +15,16 @@ use std::path::{Path, PathBuf};
 /// What surrounds the scene (`Settings::environment`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Environment {
+    /// The default light: the daylight sky of sky.rs when the scene brings no light of its
+    /// own, black otherwise (the rule is in default_light.rs). `Settings::default()`'s choice.
+    DefaultLight,
     /// The same radiance from every direction.
     Constant(Vec3),
     /// An equirectangular map file and a multiplier applied to its radiance.
     Map(PathBuf, f32),
 }
 
+/// Black: no light from outside.
 impl Default for Environment {
     fn default() -> Self {
         Environment::Constant(Vec3::ZERO)
@@ -68,8 +72,11 @@ pub fn texel_solid_angle(row: u32, width: u32, height: u32) -> f64 {
 
 impl EnvironmentData {
     /// Loads and prepares `env`. A missing or undecodable map file is an error naming it.
+    /// `DefaultLight` gives black here: whether a scene gets the sky instead is
+    /// default_light.rs's decision.
     pub fn load(env: &Environment) -> Result<Self> {
         match env {
+            Environment::DefaultLight => Ok(Self::constant(Vec3::ZERO)),
             Environment::Constant(c) => Ok(Self::constant(*c)),
             Environment::Map(path, intensity) => {
                 if !intensity.is_finite() || *intensity < 0.0 {

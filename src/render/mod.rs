@@ -3,6 +3,7 @@
 
 pub mod brdf;
 pub mod camera;
+pub mod default_light;
 mod deform;
 pub mod environment;
 pub mod frame;
@@ -11,6 +12,7 @@ mod mips;
 pub mod plan;
 pub mod ray_batch;
 pub mod scene_gpu;
+pub mod sky;
 
 pub use camera::{CameraChoice, View};
 pub use environment::Environment;
@@ -33,7 +35,8 @@ pub struct Settings {
     pub height: u32,
     /// Exposure multiplier applied before tonemapping.
     pub exposure: f32,
-    /// What rays and pixels that leave the scene see (the hybrid frame shows a map's mean).
+    /// What rays and pixels that leave the scene see. The default, `DefaultLight`, lights a
+    /// scene that brings no light of its own with a daylight sky (default_light.rs).
     pub environment: Environment,
     /// Animation time step between frames, seconds.
     pub frame_dt: f32,
@@ -84,7 +87,7 @@ impl Default for Settings {
             width: 640,
             height: 360,
             exposure: 1.0,
-            environment: Environment::default(),
+            environment: Environment::DefaultLight,
             frame_dt: 1.0 / 30.0,
             start_time: 0.0,
             primary_rays: false,
@@ -109,6 +112,8 @@ pub const DISPLAY_OUTPUT: &str = passes::tonemap::COLOR;
 pub struct Renderer {
     /// What the frame leaves out for this scene, and why.
     pub plan: plan::FramePlan,
+    /// Which environment lights the scene, and why (the default light or not).
+    pub lighting: default_light::Lighting,
     pub ctx: Arc<Context>,
     pool: CommandPool,
     pub scene: Scene,
@@ -185,6 +190,9 @@ impl Renderer {
         backend: Backend,
     ) -> Result<Self> {
         crate::accel::sort_triangles_spatially(&mut scene);
+        // Decided on the scene as loaded: lights the plan culls below are still its own.
+        let (environment, lighting) = default_light::environment_data(&settings.environment, &scene)?;
+        log::info!("lighting of {}: {}", scene.name, lighting.note);
         let plan = if settings.full {
             plan::FramePlan::full()
         } else {
@@ -202,7 +210,6 @@ impl Renderer {
             );
         }
         let camera = camera::resolve(&scene, camera)?;
-        let environment = environment::EnvironmentData::load(&settings.environment)?;
         let pool = CommandPool::new(ctx)?;
         let pose = scene.evaluate(settings.start_time);
         let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment, settings.brdf)?;
@@ -212,6 +219,7 @@ impl Renderer {
         let graph = Graph::new(ctx, frame_passes, extent)?;
         Ok(Self {
             plan,
+            lighting,
             ctx: ctx.clone(),
             pool,
             scene,

@@ -6,7 +6,8 @@ use super::{Config, Point, SceneSweep};
 use crate::backend::Backend;
 use crate::bench::slug;
 use crate::bench::target::{self, Measured, Target};
-use crate::render::CameraChoice;
+use crate::render::{CameraChoice, Environment, default_light};
+use crate::scene::Scene;
 use anyhow::{Context as _, Result, bail};
 use std::path::{Path, PathBuf};
 
@@ -68,6 +69,12 @@ pub fn scene_hash(spec: &str) -> Result<String> {
     Ok(format!("{:016x}", h.0))
 }
 
+/// The scene as it appears in cache keys: its content hash, marked when the default light
+/// lights it.
+pub fn lit_scene_key(hash: String, default_light: bool) -> String {
+    if default_light { format!("{hash}-daylight") } else { hash }
+}
+
 /// The camera as it appears in cache keys.
 pub fn camera_key(c: &CameraChoice) -> String {
     match c {
@@ -94,23 +101,28 @@ pub fn sweep_cache_path(
 }
 
 /// For `render --target-ms / --target-error`: the configuration picked from the cached sweep
-/// of this scene, camera, size, backend and device, and why.
+/// of this scene (as named on the command line, loaded, and lit by `environment`), camera,
+/// size, backend and device, and why.
 pub fn pick_for_render(
     cache_dir: &Path,
-    spec: &str,
+    (spec, scene, environment): (&str, &Scene, &Environment),
     camera: &CameraChoice,
     size: (u32, u32),
     backend: Backend,
     device: &str,
     goal: Target,
 ) -> Result<(Config, String)> {
-    let hash = scene_hash(spec)?;
+    let lit = default_light::choose(environment, scene).default_light;
+    let hash = lit_scene_key(scene_hash(spec)?, lit);
     let cam = camera_key(camera);
     let path = sweep_cache_path(cache_dir, &hash, &cam, size, backend, device);
     if !path.is_file() {
         let (w, h) = size;
-        let camera_arg =
+        let mut camera_arg =
             if matches!(camera, CameraChoice::Default) { String::new() } else { format!(" --camera {cam}") };
+        if !lit && default_light::choose(&Environment::DefaultLight, scene).default_light {
+            camera_arg += " --no-default-light";
+        }
         let mut msg = format!(
             "no speed/accuracy sweep of {spec} at {w}x{h} ({} backend, {cam} camera) on {device} in {}; \
              make one with: hybrid-rt bench sweep {spec} --size {w}x{h}{camera_arg} --backend {}",

@@ -21,12 +21,14 @@
 //!
 //! Each sweep is also cached for `hybrid-rt render --target-ms / --target-error`
 //! (`CACHE/sweep/<scene hash>-<camera>-<WxH>-<backend>-<device>.json`, the latest run wins).
+//! A scene lit by the default light (src/render/default_light.rs) has `-daylight` after its
+//! hash in both keys, so results with and without it never stand in for each other.
 
 mod cache;
 mod config;
 mod report;
 
-pub use cache::{camera_key, pick_for_render, scene_hash, sweep_cache_path};
+pub use cache::{camera_key, lit_scene_key, pick_for_render, scene_hash, sweep_cache_path};
 pub use config::{Config, DEFAULT_CONFIGS, default_configs};
 pub use report::table;
 
@@ -37,7 +39,7 @@ use crate::gpu::{Context, ShaderLibrary};
 use crate::image_io::{self, CpuImage, Texels};
 use crate::metrics::{self, DisplayTransform, HdrFlipOptions};
 use crate::passes::pathtrace;
-use crate::render::{CameraChoice, RenderMode, Renderer, Settings};
+use crate::render::{CameraChoice, Environment, RenderMode, Renderer, Settings, default_light};
 use crate::scene::Scene;
 use anyhow::{Context as _, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -66,6 +68,9 @@ pub struct Options {
     pub camera: CameraChoice,
     /// Where references and sweep results are cached (`out/cache` by default).
     pub cache_dir: PathBuf,
+    /// What lights the scene from outside: `Environment::DefaultLight` or black (both the
+    /// reference and every configuration).
+    pub environment: Environment,
     /// Render the reference again even when a cached one exists (and replace it).
     pub fresh_reference: bool,
 }
@@ -220,6 +225,7 @@ fn reference(
             width: w,
             height: h,
             mode: RenderMode::Reference { seed, max_bounces: opts.reference_bounces },
+            environment: opts.environment.clone(),
             ..Default::default()
         };
         let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
@@ -277,7 +283,13 @@ fn run_config(
     config: Config,
     bar: &indicatif::ProgressBar,
 ) -> Result<Run> {
-    let mut settings = Settings { width: opts.width, height: opts.height, frame_dt: 0.0, ..Default::default() };
+    let mut settings = Settings {
+        width: opts.width,
+        height: opts.height,
+        frame_dt: 0.0,
+        environment: opts.environment.clone(),
+        ..Default::default()
+    };
     config.apply(&mut settings);
     let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
     let mut totals = Vec::new();
@@ -348,7 +360,7 @@ pub fn sweep_scene(
         );
     }
     let start = Instant::now();
-    let hash = scene_hash(spec)?;
+    let hash = lit_scene_key(scene_hash(spec)?, default_light::choose(&opts.environment, scene).default_light);
     let (reference, reference_info) = reference(ctx, shaders, spec, scene, backend, opts, &hash)?;
     let rounds = opts.rounds.max(1);
     let bar = crate::progress::progress_bar(opts.configs.len() as u64 * opts.frames as u64 * rounds as u64, "frames");
