@@ -14,6 +14,12 @@
 //   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
 //   chosen) and the bounce ray hitting an emitter or escaping, combined with the power
 //   heuristic;
+// - direct light from the punctual lights past the first SHADOWED_LIGHTS (which composite
+//   shades with the shadows chain's per-light visibility): one light resampled from
+//   RIS_CANDIDATES candidates (common/many_lights.glsl) and one shadow ray, whatever the number
+//   of lights; its diffuse lobe goes into the diffuse signal and its specular lobe into
+//   gi.specular on every surface (the reflections pass adds it under the cut-off, where its
+//   rays cannot find a punctual light);
 // - one-bounce indirect light: at the bounce ray's hit, next-event estimation toward a light
 //   chosen by power (any kind, with a shadow ray); with `bounces` > 1 the path continues by
 //   BSDF sampling, with a light sample at each vertex.
@@ -21,6 +27,7 @@
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
+#include "common/many_lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 
@@ -80,7 +87,7 @@ void main() {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = mr.y > params.roughness_cutoff;
     bool diffuse = max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
-    if (imageLoad(g_ids, px).x == NO_INSTANCE || !(diffuse || rough)) {
+    if (imageLoad(g_ids, px).x == NO_INSTANCE || !(diffuse || rough || many_lights_present())) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
         return;
@@ -111,10 +118,20 @@ void main() {
         }
     }
 
-    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface.
+    // The punctual lights left to resampling: both lobes, one shadow ray.
+    NeeSample rs = many_light_sample(origin, m, n, ng, v, rng);
+    if (dot(rs.weight, rs.weight) > 0.0 &&
+        !trace_any(origin, rs.dir, 0.0, shadow_ray_tmax(rs.dist), RAY_MASK_ALL)) {
+        float cos_l = max(dot(n, rs.dir), 0.0);
+        l_sum += rs.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l));
+        spec_sum += rs.weight * brdf_eval_specular_cos(m, n, v, rs.dir);
+    }
+
+    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface
+    // (nothing to gather for a smooth metal, here only for the resampled lights).
     vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
     float pdf = max(dot(n, dir), 0.0) * INV_PI;
-    if (dot(dir, ng) > 0.0 && pdf > 0.0) {
+    if ((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0) {
         vec3 lobe = 1.0 - brdf_specular_albedo(m, dot(n, dir));
         vec3 bounce = vec3(0.0);
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
