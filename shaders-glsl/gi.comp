@@ -105,26 +105,27 @@ void main() {
     // its albedo.
     vec3 l_sum = vec3(0.0);
 
-    // Direct light from emitters and the environment, light-sampled. Sampled from the shadow
+    // Direct light from emitters and the environment, light-sampled (punctual lights, which
+    // carry pdf 0, are left to composite and to the resampling below). Sampled from the shadow
     // ray's own origin: direction and distance measured from the surface point would overshoot
     // by the offset, and the shadow ray would hit the emitter it aims at.
-    NeeSample ls = light_sample(origin, rng_next3(rng));
-    if (ls.pdf > 0.0 && dot(ls.dir, ng) > 0.0) {
+    NeeSample direct[2];
+    direct[0] = light_sample(origin, rng_next3(rng));
+    if (!(direct[0].pdf > 0.0)) direct[0] = nee_none();
+    // The punctual lights left to resampling: both lobes.
+    direct[1] = many_light_sample(origin, m, n, ng, v, rng);
+    // One shadow-ray call site for both: the compute backend inlines its traversal at every
+    // call, and each copy lengthens a CPU driver's shader compilation.
+    for (uint k = 0u; k < 2u; ++k) {
+        NeeSample ls = direct[k];
         float cos_l = max(dot(n, ls.dir), 0.0);
-        if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
-            float w = mis_power(ls.pdf, cos_l * INV_PI);
-            l_sum += ls.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l)) * w;
-            if (rough) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
-        }
-    }
-
-    // The punctual lights left to resampling: both lobes, one shadow ray.
-    NeeSample rs = many_light_sample(origin, m, n, ng, v, rng);
-    if (dot(rs.weight, rs.weight) > 0.0 &&
-        !trace_any(origin, rs.dir, 0.0, shadow_ray_tmax(rs.dist), RAY_MASK_ALL)) {
-        float cos_l = max(dot(n, rs.dir), 0.0);
-        l_sum += rs.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l));
-        spec_sum += rs.weight * brdf_eval_specular_cos(m, n, v, rs.dir);
+        if (dot(ls.weight, ls.weight) == 0.0 || dot(ls.dir, ng) <= 0.0 || cos_l <= 0.0) continue;
+        if (trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) continue;
+        // MIS against the bounce for emitters and the environment; resampled punctual lights
+        // cannot be hit by the bounce (weight 1).
+        float w = k == 0u ? mis_power(ls.pdf, cos_l * INV_PI) : 1.0;
+        l_sum += ls.weight * cos_l * INV_PI * (1.0 - brdf_specular_albedo(m, cos_l)) * w;
+        if (rough || k == 1u) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
     }
 
     // The bounce: cosine-weighted about the shading normal, kept above the geometric surface

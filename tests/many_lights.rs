@@ -27,10 +27,11 @@ fn settings(denoiser: bool) -> Settings {
 }
 
 fn backends(ctx: &Context) -> Vec<Backend> {
-    let mut b = vec![Backend::Compute];
+    let mut b = Vec::new();
     if ctx.caps.supports_ray_query() {
         b.push(Backend::RayQuery);
     }
+    b.push(Backend::Compute);
     b
 }
 
