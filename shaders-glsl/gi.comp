@@ -15,12 +15,6 @@
 //   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
 //   chosen) and the bounce ray hitting an emitter or escaping, combined with the power
 //   heuristic;
-// - direct light from the punctual lights past the first SHADOWED_LIGHTS (which composite
-//   shades with the shadows chain's per-light visibility): one light resampled from
-//   RIS_CANDIDATES candidates (common/many_lights.glsl) and one shadow ray, whatever the number
-//   of lights; its diffuse lobe goes into the diffuse signal and its specular lobe into
-//   gi.specular on every surface (the reflections pass adds it under the cut-off, where its
-//   rays cannot find a punctual light);
 // - one-bounce indirect light: at the bounce ray's hit, next-event estimation toward a light
 //   chosen by power (any kind, with a shadow ray); with `bounces` > 1 the path continues by
 //   BSDF sampling, with a light sample at each vertex.
@@ -28,7 +22,6 @@
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
-#include "common/many_lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 
@@ -88,7 +81,7 @@ void main() {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = mr.y > params.roughness_cutoff;
     bool diffuse = max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
-    if (imageLoad(g_ids, px).x == NO_INSTANCE || !(diffuse || rough || many_lights_present())) {
+    if (imageLoad(g_ids, px).x == NO_INSTANCE || !(diffuse || rough)) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
         return;
@@ -106,34 +99,23 @@ void main() {
     // its albedo.
     vec3 l_sum = vec3(0.0);
 
-    // Direct light from emitters and the environment, light-sampled (punctual lights, which
-    // carry pdf 0, are left to composite and to the resampling below). Sampled from the shadow
+    // Direct light from emitters and the environment, light-sampled. Sampled from the shadow
     // ray's own origin: direction and distance measured from the surface point would overshoot
     // by the offset, and the shadow ray would hit the emitter it aims at.
-    NeeSample direct[2];
-    direct[0] = light_sample(origin, rng_next3(rng));
-    if (!(direct[0].pdf > 0.0)) direct[0] = nee_none();
-    // The punctual lights left to resampling: both lobes.
-    direct[1] = many_light_sample(origin, m, n, ng, v, rng);
-    // One shadow-ray call site for both: the compute backend inlines its traversal at every
-    // call, and each copy lengthens a CPU driver's shader compilation.
-    for (uint k = 0u; k < 2u; ++k) {
-        NeeSample ls = direct[k];
+    NeeSample ls = light_sample(origin, rng_next3(rng));
+    if (ls.pdf > 0.0 && dot(ls.dir, ng) > 0.0) {
         float cos_l = max(dot(n, ls.dir), 0.0);
-        if (dot(ls.weight, ls.weight) == 0.0 || dot(ls.dir, ng) <= 0.0 || cos_l <= 0.0) continue;
-        if (trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) continue;
-        // MIS against the bounce for emitters and the environment; resampled punctual lights
-        // cannot be hit by the bounce (weight 1).
-        float w = k == 0u ? mis_power(ls.pdf, cos_l * INV_PI) : 1.0;
-        l_sum += ls.weight * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, ls.dir) * w;
-        if (rough || k == 1u) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
+        if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
+            float w = mis_power(ls.pdf, cos_l * INV_PI);
+            l_sum += ls.weight * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, ls.dir) * w;
+            if (rough) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
+        }
     }
 
-    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface
-    // (nothing to gather for a smooth metal, here only for the resampled lights).
+    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface.
     vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
     float pdf = max(dot(n, dir), 0.0) * INV_PI;
-    if ((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0) {
+    if (dot(dir, ng) > 0.0 && pdf > 0.0) {
         vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);

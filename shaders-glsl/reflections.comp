@@ -3,9 +3,7 @@
 // distribution of visible normals (a perfect mirror reflects exactly); each hit is shaded with
 // its emission and a light sample toward a light chosen by power (with a shadow ray); rays that
 // escape see the environment. Surfaces rougher than the cut-off trace nothing and take the
-// specular estimate the gi pass made from its own samples (gi.specular); smoother ones add
-// gi.specular to their own rays, where it holds only the lobe's light from the resampled
-// punctual lights (gi.comp), which no reflection ray can hit. The output is the lobe's
+// specular estimate the gi pass made from its own samples (gi.specular). The output is the lobe's
 // contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
 // for the denoiser.
 #extension GL_GOOGLE_include_directive : require
@@ -111,6 +109,6 @@ void main() {
             hits += 1.0;
         }
     }
-    imageStore(out_radiance, px, vec4(sum / float(count) + imageLoad(gi_specular, px).rgb, 1.0));
+    imageStore(out_radiance, px, vec4(sum / float(count), 1.0));
     imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
 }

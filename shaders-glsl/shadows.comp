@@ -1,6 +1,5 @@
 #version 460
-// shadows: visibility of the first four punctual lights (the four brightest when there are
-// more; gi resamples the rest, common/many_lights.glsl) from every G-buffer surface, through
+// shadows: visibility of the first four punctual lights from every G-buffer surface, through
 // the trace interface (Ray Tracing Gems ch. 13, adaptive sampling).
 // - Hard lights (radius 0): one shadow ray every frame, stored as is.
 // - Area lights (sphere or disk): a per-pixel sample count 1..s_max carried from frame to

@@ -48,9 +48,6 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     );
     println!("  shadows_penumbra/tent/filter {}", on(plan.soft_shadows));
     println!("  gi                       {}", on(plan.gi));
-    if plan.resampled_lights > 0 {
-        println!("    + many-light resampling of {} lights (one shadow ray per pixel)", plan.resampled_lights);
-    }
     println!("  reflections              {}", on(plan.reflections));
     println!("  svgf chains, composite, taa, tonemap, history  run");
     println!("why:");

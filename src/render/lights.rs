@@ -14,16 +14,10 @@
 //! (its cone), E pi r^2 for a directional light, pi L A per emitting side of a triangle, and
 //! 4 pi^2 r^2 L_mean for the environment. It only steers variance; any positive weight for a
 //! light that can contribute keeps the estimate unbiased.
-//!
-//! The CDF's first entries are the punctual lights, entry i for light i: the resampled
-//! many-light path (shaders-glsl/common/many_lights.glsl) draws its candidates from the
-//! sub-range after the per-light-shadowed lights, which this order makes contiguous.
-//! [`shading_order`] decides which lights those are: the brightest.
 
 use super::environment::{EnvironmentData, luminance};
 use super::scene_gpu::binding;
 use crate::gpu::{self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, vk};
-use crate::passes::shadows::MAX_SHADOWED_LIGHTS;
 use crate::scene::{LightKind, Pose, Scene};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -249,21 +243,6 @@ fn emitter_power(scene: &Scene, e: &GpuEmitter) -> f32 {
     PI * luminance(material.emissive_factor) * e.area * sides
 }
 
-/// The order in which the renderer keeps the scene's lights, `excluded` (culled) left out. The
-/// first [`MAX_SHADOWED_LIGHTS`] get the shadows chain's per-light visibility (exact, and
-/// adaptive soft shadows for lights with a radius), the rest are resampled in gi; so with more
-/// lights than that, the brightest (by power, ties in scene order) come first. With no more,
-/// the scene's order is kept.
-pub fn shading_order(scene: &Scene, excluded: &[usize]) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..scene.lights.len()).filter(|i| !excluded.contains(i)).collect();
-    if order.len() > MAX_SHADOWED_LIGHTS {
-        let radius = scene_radius(scene, &scene.evaluate(0.0));
-        let power: Vec<f32> = scene.lights.iter().map(|l| punctual_power(l, radius)).collect();
-        order.sort_by(|&a, &b| power[b].total_cmp(&power[a]));
-    }
-    order
-}
-
 fn punctual_power(light: &crate::scene::Light, radius: f32) -> f32 {
     let i = luminance(light.color * light.intensity).max(0.0);
     match light.kind {
@@ -362,33 +341,6 @@ mod tests {
         assert_eq!(size_of::<GpuLightEntry>(), 16);
         assert_eq!(size_of::<GpuEmitter>(), 4 * (12 + 4));
         assert_eq!(std::mem::offset_of!(GpuEmitter, normal), 48);
-    }
-
-    /// many_lights.glsl takes entry i of the table for punctual light i.
-    #[test]
-    fn punctual_lights_lead_the_cdf_in_light_order() {
-        let powers: Vec<(u32, u32, f32)> = (0..6)
-            .map(|i| (LIGHT_KIND_PUNCTUAL, i, 1.0 + i as f32))
-            .chain([(LIGHT_KIND_EMITTER, 0, 2.0), (LIGHT_KIND_ENVIRONMENT, 0, 1.0)])
-            .collect();
-        let entries = light_cdf(&powers);
-        for (i, e) in entries.iter().take(6).enumerate() {
-            assert_eq!((e.kind, e.index), (LIGHT_KIND_PUNCTUAL, i as u32));
-        }
-    }
-
-    #[test]
-    fn more_lights_than_the_shadowed_ones_are_ordered_brightest_first() {
-        let s = crate::scene::builtin_many_lights::many_lights();
-        let order = shading_order(&s, &[]);
-        assert_eq!(order.len(), s.lights.len());
-        let radius = scene_radius(&s, &s.evaluate(0.0));
-        let p = |i: usize| punctual_power(&s.lights[i], radius);
-        assert!(order.windows(2).all(|w| p(w[0]) >= p(w[1])));
-        // A few lights keep the scene's order; excluded ones are left out.
-        let s = builtin::soft_shadow_test();
-        assert_eq!(shading_order(&s, &[]), vec![0]);
-        assert!(shading_order(&s, &[0]).is_empty());
     }
 
     #[test]

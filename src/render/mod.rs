@@ -198,10 +198,9 @@ impl Renderer {
         } else {
             plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff)
         };
-        // Culled lights leave; with many lights, the brightest come first (they get per-light
-        // shadows, see lights::shading_order).
-        let order = lights::shading_order(&scene, &plan.culled_lights);
-        scene.lights = order.iter().map(|&i| scene.lights[i].clone()).collect();
+        for &i in plan.culled_lights.iter().rev() {
+            scene.lights.remove(i);
+        }
         let limit = ctx.caps.max_image_dimension_2d;
         if settings.width == 0 || settings.height == 0 || settings.width > limit || settings.height > limit {
             bail!(

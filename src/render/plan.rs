@@ -7,15 +7,10 @@
 //!   with punctual lights only, one hard-shadow ray per light and no filter.
 //! - Lights whose range cannot reach any geometry are culled (static scenes only: in an
 //!   animated scene a light or an object could move into range).
-//! - Up to four punctual lights each get their own ray-traced visibility (exact and noise-free,
-//!   with adaptive soft shadows); with more, the four brightest keep it and the rest are
-//!   resampled in gi: one light per pixel from candidates drawn by power, one shadow ray, the
-//!   cost per pixel independent of their number (see lights::shading_order).
 //! - Instances share one bottom-level structure per unique mesh (reported; always so).
 //! - GI runs every frame when any surface has a diffuse albedo or is rough enough for its
 //!   specular lobe to come from gi; otherwise it would have nothing to add.
 
-use crate::passes::shadows::MAX_SHADOWED_LIGHTS;
 use crate::scene::{Scene, TextureRef};
 use glam::Vec3;
 
@@ -26,8 +21,6 @@ pub struct FramePlan {
     pub gi: bool,
     /// Indices into the scene's lights that cannot reach any geometry.
     pub culled_lights: Vec<usize>,
-    /// Lights past the per-light-shadowed ones, resampled in gi.
-    pub resampled_lights: usize,
     /// One line per decision, saying why.
     pub reasons: Vec<String>,
 }
@@ -40,7 +33,6 @@ impl FramePlan {
             soft_shadows: true,
             gi: true,
             culled_lights: Vec::new(),
-            resampled_lights: 0,
             reasons: vec!["--full: every pass runs".into()],
         }
     }
@@ -61,11 +53,7 @@ impl FramePlan {
             format!("reflections: no rays, no surface is at or under roughness {roughness_cutoff} (gi estimates the specular lobes)")
         });
 
-        let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
-        let order = crate::render::lights::shading_order(scene, &culled_lights);
-        let shadowed = &order[..order.len().min(MAX_SHADOWED_LIGHTS)];
-        let soft: Vec<&str> =
-            shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
+        let soft: Vec<&str> = scene.lights.iter().filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
         let soft_shadows = !soft.is_empty();
         reasons.push(if soft_shadows {
             format!("shadows: adaptive soft shadows for {} light(s) with a radius: {}", soft.len(), list(&soft))
@@ -73,6 +61,7 @@ impl FramePlan {
             "shadows: every light is punctual: one hard-shadow ray per light, no penumbra detection or filter".into()
         });
 
+        let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
         if scene.is_animated() {
             reasons.push("lights: none culled, the scene is animated".into());
         } else if culled_lights.is_empty() {
@@ -82,27 +71,6 @@ impl FramePlan {
             reasons.push(format!("lights: culled {} whose range reaches no geometry: {}", names.len(), list(&names)));
         }
 
-        let resampled_lights = order.len() - shadowed.len();
-        reasons.push(if resampled_lights > 0 {
-            let names: Vec<&str> = shadowed.iter().map(|&i| scene.lights[i].name.as_str()).collect();
-            format!(
-                "many lights: {} punctual lights; the {} brightest ({}) keep a visibility of their own \
-                 (exact, noise-free); the other {resampled_lights} are resampled in gi: one light per \
-                 pixel chosen from 8 candidates drawn by power, weighted by its unshadowed contribution \
-                 (RIS), one shadow ray, denoised with the diffuse and specular signals; the cost per \
-                 pixel does not grow with the number of lights",
-                order.len(),
-                shadowed.len(),
-                list(&names)
-            )
-        } else {
-            format!(
-                "lights: {} punctual light(s), each with its own ray-traced visibility (at most {MAX_SHADOWED_LIGHTS}: \
-                 exact and noise-free, no resampling needed)",
-                order.len()
-            )
-        });
-
         let unique = scene.meshes.len();
         reasons.push(format!(
             "geometry: {} instance(s) share {unique} bottom-level structure(s), one per unique mesh",
@@ -111,15 +79,13 @@ impl FramePlan {
 
         let diffuse = scene.materials.iter().any(|m| m.metallic_factor < 1.0 || m.metallic_roughness_texture.is_some());
         let rough = scene.materials.iter().any(|m| m.roughness_factor > roughness_cutoff);
-        let gi = diffuse || rough || resampled_lights > 0;
-        reasons.push(if gi && !(diffuse || rough) {
-            "gi: every frame (it shades the resampled lights)".into()
-        } else if gi {
+        let gi = diffuse || rough;
+        reasons.push(if gi {
             "gi: every frame (diffuse or rough surfaces need indirect light)".into()
         } else {
             "gi: skipped, every surface is a smooth metal (no diffuse lobe, no rough specular)".into()
         });
-        Self { reflections, soft_shadows, gi, culled_lights, resampled_lights, reasons }
+        Self { reflections, soft_shadows, gi, culled_lights, reasons }
     }
 }
 
@@ -196,16 +162,6 @@ mod tests {
         assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
         let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6);
         assert!(p.soft_shadows);
-    }
-
-    #[test]
-    fn more_than_four_lights_are_resampled_beyond_the_four_brightest() {
-        let p = FramePlan::for_scene(&crate::scene::builtin_many_lights::many_lights(), 0.6);
-        assert_eq!(p.resampled_lights, 304 - MAX_SHADOWED_LIGHTS, "{:?}", p.reasons);
-        // The two strongest lights of the scene are sphere lights: the soft chain runs.
-        assert!(p.soft_shadows && p.gi, "{:?}", p.reasons);
-        assert!(p.reasons.iter().any(|r| r.contains("resampled") && r.contains("hidden.37")), "{:?}", p.reasons);
-        assert_eq!(FramePlan::for_scene(&builtin::shadow_test(), 0.6).resampled_lights, 0);
     }
 
     #[test]

@@ -1,5 +1,4 @@
-//! Ray-traced shadows of the first four punctual lights (the brightest, when there are more:
-//! the others are resampled in gi), after Ray Tracing Gems ch. 13
+//! Ray-traced shadows of the first four punctual lights, after Ray Tracing Gems ch. 13
 //! (adaptive sampling): a chain of passes, one file and one shader each.
 //!
 //! `shadows` (trace, 4-frame visibility ring, sample counts) -> `shadows_penumbra` (dv, 5x5 max)
@@ -27,9 +26,7 @@ use bytemuck::{Pod, Zeroable};
 pub const VISIBILITY: &str = "shadows_filter.visibility";
 /// The visibility of a chain without soft lights (see [`Chain::visibility`]).
 pub const HARD_VISIBILITY: &str = "shadows.ring0";
-/// Lights with a visibility of their own (one channel each). The rest are resampled in gi, one
-/// light per pixel with its own shadow ray (shaders-glsl/common/many_lights.glsl,
-/// `SHADOWED_LIGHTS` there).
+/// Lights beyond this many are shaded without shadows.
 pub const MAX_SHADOWED_LIGHTS: usize = 4;
 
 /// The named settings of the adaptive shadows.
