@@ -22,9 +22,9 @@ layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 3, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_emissive;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 6, rgba16f) uniform readonly image2D shadow_visibility;
-layout(set = 1, binding = 7, rgba32f) uniform readonly image2D diffuse_signal;
-layout(set = 1, binding = 8, rgba32f) uniform readonly image2D specular_signal;
+layout(set = 1, binding = 6, rgba16f) uniform readonly image2D in_visibility;
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D in_diffuse;
+layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_specular;
 layout(set = 1, binding = 9, rgba32f) uniform writeonly image2D out_color;
 
 void main() {
@@ -42,7 +42,7 @@ void main() {
     vec4 mr = imageLoad(g_metal_rough, px);
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
 
-    vec4 vis = imageLoad(shadow_visibility, px);
+    vec4 vis = imageLoad(in_visibility, px);
     vec3 radiance = imageLoad(g_emissive, px).rgb;
     for (uint i = 0u; i < frame.light_count; ++i) {
         LightSample ls = sample_punctual(lights[i], p);
@@ -50,7 +50,7 @@ void main() {
         radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * v_i;
     }
     // The diffuse signal is the lobe without its albedo (gi.comp).
-    radiance += brdf_diffuse_albedo(m) * imageLoad(diffuse_signal, px).rgb;
-    radiance += imageLoad(specular_signal, px).rgb;
+    radiance += brdf_diffuse_albedo(m) * imageLoad(in_diffuse, px).rgb;
+    radiance += imageLoad(in_specular, px).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

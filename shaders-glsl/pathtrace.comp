@@ -17,12 +17,12 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 // rgb: sum of all samples so far; a: number of samples.
-layout(set = 1, binding = 0, rgba32f) uniform image2D io_accum;
+layout(set = 1, binding = 0, rgba32f) uniform image2D out_accum;
 // rgb: accum / samples (linear radiance).
 layout(set = 1, binding = 1, rgba32f) uniform writeonly image2D out_color;
 // Rays traced for this pixel so far (closest-hit and shadow rays): for rays/s and a map of
 // where paths are long.
-layout(set = 1, binding = 2, r32ui) uniform uimage2D io_rays;
+layout(set = 1, binding = 2, r32ui) uniform uimage2D out_rays;
 
 layout(push_constant) uniform Params {
     // Mixed into every pixel's random stream with the frame index: same seed, same image.
@@ -111,10 +111,10 @@ void main() {
     // A NaN or infinity would poison the pixel for the rest of the run: drop the sample (it
     // still counts as taken, so the image stays an average over the same number of samples).
     if (any(isnan(l)) || any(isinf(l))) l = vec3(0.0);
-    vec4 sum = sample_index == 0u ? vec4(0.0) : imageLoad(io_accum, px);
-    uint total_rays = sample_index == 0u ? 0u : imageLoad(io_rays, px).x;
+    vec4 sum = sample_index == 0u ? vec4(0.0) : imageLoad(out_accum, px);
+    uint total_rays = sample_index == 0u ? 0u : imageLoad(out_rays, px).x;
     sum += vec4(l, 1.0);
-    imageStore(io_accum, px, sum);
+    imageStore(out_accum, px, sum);
     imageStore(out_color, px, vec4(sum.rgb / sum.a, 1.0));
-    imageStore(io_rays, px, uvec4(total_rays + rays));
+    imageStore(out_rays, px, uvec4(total_rays + rays));
 }

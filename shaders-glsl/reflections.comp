@@ -21,7 +21,7 @@ layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 6, rgba32f) uniform readonly image2D gi_specular;
+layout(set = 1, binding = 6, rgba32f) uniform readonly image2D in_specular;
 layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_radiance;
 layout(set = 1, binding = 8, r32f) uniform writeonly image2D out_hit_distance;
 
@@ -70,7 +70,7 @@ void main() {
     float n_dot_v = max(dot(n, v), 1e-4);
 
     if (m.roughness > params.roughness_cutoff) {
-        imageStore(out_radiance, px, vec4(imageLoad(gi_specular, px).rgb, 1.0));
+        imageStore(out_radiance, px, vec4(imageLoad(in_specular, px).rgb, 1.0));
         imageStore(out_hit_distance, px, vec4(0.0));
         return;
     }

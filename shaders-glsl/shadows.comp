@@ -28,7 +28,7 @@ layout(set = 1, binding = 4, rg32f) uniform readonly image2D prev_depth;
 layout(set = 1, binding = 5, rgba16f) uniform readonly image2D prev_ring0;
 layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_ring1;
 layout(set = 1, binding = 7, rgba16f) uniform readonly image2D prev_ring2;
-layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_count;
+layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_sample_count;
 layout(set = 1, binding = 9, rgba16f) uniform readonly image2D prev_stable;
 layout(set = 1, binding = 10, rgba16f) uniform readonly image2D prev_dv;      // last frame's filtered variation
 layout(set = 1, binding = 11, r32ui) uniform readonly uimage2D prev_budget;   // last frame's summed variation x 64
@@ -36,7 +36,7 @@ layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_ring0;
 layout(set = 1, binding = 13, rgba16f) uniform writeonly image2D out_ring1;
 layout(set = 1, binding = 14, rgba16f) uniform writeonly image2D out_ring2;
 layout(set = 1, binding = 15, rgba16f) uniform writeonly image2D out_ring3;
-layout(set = 1, binding = 16, rgba16f) uniform writeonly image2D out_count;   // sample count per light (0: culled)
+layout(set = 1, binding = 16, rgba16f) uniform writeonly image2D out_sample_count;   // sample count per light (0: culled)
 layout(set = 1, binding = 17, rgba16f) uniform writeonly image2D out_stable;  // frames the count has not changed
 
 #include "common/shadows_common.glsl"
@@ -74,7 +74,7 @@ void main() {
         imageStore(out_ring1, px, one);
         imageStore(out_ring2, px, one);
         imageStore(out_ring3, px, one);
-        imageStore(out_count, px, vec4(0.0));
+        imageStore(out_sample_count, px, vec4(0.0));
         imageStore(out_stable, px, vec4(0.0));
         return;
     }
@@ -92,7 +92,7 @@ void main() {
     vec4 r0 = reprojected ? imageLoad(prev_ring0, q) : vec4(0.0);
     vec4 r1 = reprojected ? imageLoad(prev_ring1, q) : vec4(0.0);
     vec4 r2v = reprojected ? imageLoad(prev_ring2, q) : vec4(0.0);
-    vec4 count = reprojected ? imageLoad(prev_count, q) : vec4(0.0);
+    vec4 count = reprojected ? imageLoad(prev_sample_count, q) : vec4(0.0);
     vec4 stable = reprojected ? imageLoad(prev_stable, q) : vec4(0.0);
     vec4 dv = reprojected ? imageLoad(prev_dv, q) : vec4(1.0);
 
@@ -158,6 +158,6 @@ void main() {
     imageStore(out_ring1, px, r0);
     imageStore(out_ring2, px, r1);
     imageStore(out_ring3, px, r2v);
-    imageStore(out_count, px, state);
+    imageStore(out_sample_count, px, state);
     imageStore(out_stable, px, stable);
 }

@@ -15,12 +15,12 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 1, binding = 0, rgba16f) uniform readonly image2D ring0;
-layout(set = 1, binding = 1, rgba16f) uniform readonly image2D ring1;
-layout(set = 1, binding = 2, rgba16f) uniform readonly image2D ring2;
-layout(set = 1, binding = 3, rgba16f) uniform readonly image2D ring3;
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_ring0;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_ring1;
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D in_ring2;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D in_ring3;
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D in_dv_raw;
-layout(set = 1, binding = 5, rgba16f) uniform readonly image2D in_dv_tent;
+layout(set = 1, binding = 5, rgba16f) uniform readonly image2D in_dv;
 layout(set = 1, binding = 6, rg32f) uniform readonly image2D g_depth;
 layout(set = 1, binding = 7, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 8, rg32ui) uniform readonly uimage2D g_ids;
@@ -32,13 +32,13 @@ layout(set = 1, binding = 12, r32ui) uniform uimage2D out_budget;             //
 #include "common/shadows_common.glsl"
 
 vec4 temporal_mean(ivec2 q) {
-    return 0.25 * (imageLoad(ring0, q) + imageLoad(ring1, q) + imageLoad(ring2, q) + imageLoad(ring3, q));
+    return 0.25 * (imageLoad(in_ring0, q) + imageLoad(in_ring1, q) + imageLoad(in_ring2, q) + imageLoad(in_ring3, q));
 }
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
-    vec4 current = imageLoad(ring0, px);
+    vec4 current = imageLoad(in_ring0, px);
     if (imageLoad(g_ids, px).x == NO_INSTANCE) {
         imageStore(out_visibility, px, current);
         imageStore(out_dv, px, vec4(0.0));
@@ -46,7 +46,7 @@ void main() {
         return;
     }
     bvec4 soft = soft_lights();
-    vec4 dv_bar = 0.5 * (imageLoad(in_dv_tent, px) + imageLoad(in_dv_raw, px));
+    vec4 dv_bar = 0.5 * (imageLoad(in_dv, px) + imageLoad(in_dv_raw, px));
     vec4 width = 1.0 + 2.0 * floor(4.0 * clamp(dv_bar / sp.eta, 0.0, 1.0) + 0.5);
     for (uint i = 0u; i < 4u; ++i) {
         if (!soft[i]) {

@@ -9,10 +9,10 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 1, binding = 0, rgba16f) uniform readonly image2D ring0;
-layout(set = 1, binding = 1, rgba16f) uniform readonly image2D ring1;
-layout(set = 1, binding = 2, rgba16f) uniform readonly image2D ring2;
-layout(set = 1, binding = 3, rgba16f) uniform readonly image2D ring3;
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_ring0;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_ring1;
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D in_ring2;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D in_ring3;
 layout(set = 1, binding = 4, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 5, rgba16f) uniform writeonly image2D out_dv_raw;
 layout(set = 1, binding = 6, rgba16f) uniform writeonly image2D out_dv_max;
@@ -20,7 +20,7 @@ layout(set = 1, binding = 6, rgba16f) uniform writeonly image2D out_dv_max;
 #include "common/shadows_common.glsl"
 
 vec4 variation(ivec2 q) {
-    vec4 a = imageLoad(ring0, q), b = imageLoad(ring1, q), c = imageLoad(ring2, q), d = imageLoad(ring3, q);
+    vec4 a = imageLoad(in_ring0, q), b = imageLoad(in_ring1, q), c = imageLoad(in_ring2, q), d = imageLoad(in_ring3, q);
     return max(max(a, b), max(c, d)) - min(min(a, b), min(c, d));
 }
 

@@ -24,12 +24,12 @@ layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal_geo;
 layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
 layout(set = 1, binding = 8, rgba32f) uniform readonly image2D prev_color;
 layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
-layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_length;
+layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_history_length;
 layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 layout(set = 1, binding = 12, rg32f) uniform writeonly image2D out_moments;
-layout(set = 1, binding = 13, r32f) uniform writeonly image2D out_length;
+layout(set = 1, binding = 13, r32f) uniform writeonly image2D out_history_length;
 // x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
-layout(set = 1, binding = 14, r32ui) uniform uimage2D rejected;
+layout(set = 1, binding = 14, r32ui) uniform uimage2D out_rejected;
 
 #include "common/svgf.glsl"
 
@@ -75,12 +75,12 @@ void main() {
     if (id == NO_INSTANCE) {
         imageStore(out_color, px, vec4(0.0));
         imageStore(out_moments, px, vec4(0.0));
-        imageStore(out_length, px, vec4(0.0));
+        imageStore(out_history_length, px, vec4(0.0));
         return;
     }
     vec3 c;
     bool finite = load_finite(px, c);
-    if (!finite) imageAtomicAdd(rejected, ivec2(0), 1u);
+    if (!finite) imageAtomicAdd(out_rejected, ivec2(0), 1u);
     c = clamp_outlier(px, c);
 
     vec2 zf = imageLoad(g_depth, px).rg;
@@ -103,7 +103,7 @@ void main() {
         float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
         hist_c += w * imageLoad(prev_color, q).rgb;
         hist_m += w * imageLoad(prev_moments, q).xy;
-        hist_len += w * imageLoad(prev_length, q).r;
+        hist_len += w * imageLoad(prev_history_length, q).r;
         wsum += w;
     }
     float l = luminance(c);
@@ -121,5 +121,5 @@ void main() {
     }
     imageStore(out_color, px, vec4(c, 1.0));
     imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
-    imageStore(out_length, px, vec4(len));
+    imageStore(out_history_length, px, vec4(len));
 }

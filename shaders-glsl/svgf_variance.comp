@@ -10,7 +10,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, rg32f) uniform readonly image2D in_moments;
-layout(set = 1, binding = 2, r32f) uniform readonly image2D in_length;
+layout(set = 1, binding = 2, r32f) uniform readonly image2D in_history_length;
 layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_normal;  // shading normal (gbuffer.normal)
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
@@ -25,7 +25,7 @@ void main() {
         imageStore(out_variance, px, vec4(0.0));
         return;
     }
-    float len = imageLoad(in_length, px).r;
+    float len = imageLoad(in_history_length, px).r;
     vec2 m = imageLoad(in_moments, px).xy;
     if (len >= 4.0) {
         imageStore(out_variance, px, vec4(max(0.0, m.y - m.x * m.x)));

@@ -66,7 +66,6 @@ impl Capture {
         let frame = r.frame_index;
         let folder = if self.per_frame_folders { self.dir.join(format!("frame_{frame:04}")) } else { self.dir.clone() };
         let names = r.graph.output_order.clone();
-        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
         // A folder without a manifest may still hold files of the same names (a capture whose
         // manifest was removed, or the user's own): none is replaced without --force.
         for name in &names {
@@ -74,10 +73,10 @@ impl Capture {
                 image_io::check_overwrite(&folder.join(format!("{name}.{ext}")), self.force)?;
             }
         }
-        let images = r.read_outputs(&refs)?;
+        let images = r.read_outputs(&names)?;
         for (name, img) in names.iter().zip(&images) {
-            let desc = r.graph.images.desc(name).expect("graph output").clone();
-            let pass = r.graph.producer(name).unwrap_or("?").to_string();
+            let desc = r.graph.images.desc(*name).expect("graph output").clone();
+            let pass = r.graph.producer(*name).unwrap_or("?").to_string();
             let exr = folder.join(format!("{name}.exr"));
             let png = folder.join(format!("{name}.png"));
             image_io::write_exr(&exr, img, image_io::channel_names(img.channels))?;
@@ -85,7 +84,7 @@ impl Capture {
             image_io::write_png_rgba8(&png, img.width, img.height, &rgba)?;
             let gpu_ms = r.last_pass_times.iter().find(|t| t.pass == pass).map(|t| t.gpu_ms);
             self.manifest.entries.push(ManifestEntry {
-                output: name.clone(),
+                output: name.to_string(),
                 pass,
                 format: format!("{:?}", desc.format),
                 width: img.width,

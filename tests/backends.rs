@@ -15,6 +15,7 @@ use hybrid_rt::accel::bvh::rays::Ray;
 use hybrid_rt::backend::Backend;
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes;
 use hybrid_rt::passes::{gbuffer::NO_ID, primary_rays};
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::{LoadOptions, Scene, builtin, load_gltf};
@@ -35,8 +36,8 @@ fn images(r: &mut Renderer) -> Vec<CpuImage> {
     r.read_outputs(&[
         primary_rays::HIT,
         primary_rays::DEPTH,
-        "gbuffer.ids",
-        "gbuffer.depth",
+        passes::gbuffer::IDS,
+        passes::gbuffer::DEPTH,
         r.shadow_visibility(),
         primary_rays::BARY,
     ])
@@ -218,7 +219,7 @@ fn masked_shadows_follow_the_alpha_texture() {
         )
         .unwrap();
         r.render_frame().unwrap();
-        let img = r.read_outputs(&["gbuffer.ids", r.shadow_visibility()]).unwrap();
+        let img = r.read_outputs(&[passes::gbuffer::IDS, r.shadow_visibility()]).unwrap();
         let view = r.last_view.unwrap();
         let size = glam::Vec2::new(128.0, 128.0);
         let (mut lit, mut shadowed) = (0, 0);
@@ -277,7 +278,7 @@ fn hard_shadows_have_no_acne_and_keep_contact() {
         )
         .unwrap();
         r.render_frame().unwrap();
-        let img = r.read_outputs(&["gbuffer.ids", r.shadow_visibility()]).unwrap();
+        let img = r.read_outputs(&[passes::gbuffer::IDS, r.shadow_visibility()]).unwrap();
         let view = r.last_view.unwrap();
         let size = glam::Vec2::new(w as f32, h as f32);
         let floor_at = |px: glam::Vec2| {

@@ -4,6 +4,7 @@
 
 mod common;
 
+use hybrid_rt::passes;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -56,18 +57,19 @@ fn dump_passes_writes_every_output_with_exact_values() {
     let entries = m["entries"].as_array().unwrap();
     let names: Vec<&str> = entries.iter().map(|e| e["output"].as_str().unwrap()).collect();
     for expected in [
-        "gbuffer.depth",
-        "gbuffer.normal",
-        "gbuffer.motion",
-        "gbuffer.ids",
-        "shadows.sample_count",
-        "shadows_penumbra.dv_raw",
-        "shadows_filter.visibility",
-        "shadows_filter.kernel",
-        "composite.color",
-        "tonemap.color",
+        passes::gbuffer::DEPTH,
+        passes::gbuffer::NORMAL,
+        passes::gbuffer::MOTION,
+        passes::gbuffer::IDS,
+        passes::shadows::trace::SAMPLE_COUNT,
+        passes::shadows::penumbra::DV_RAW,
+        passes::shadows::filter::VISIBILITY,
+        passes::shadows::filter::KERNEL,
+        passes::composite::COLOR,
+        passes::tonemap::COLOR,
     ] {
-        assert!(names.contains(&expected), "manifest lacks {expected}: {names:?}");
+        let expected = expected.to_string();
+        assert!(names.contains(&expected.as_str()), "manifest lacks {expected}: {names:?}");
     }
     for e in entries {
         assert_eq!(e["frame"], 2, "the last frame is dumped by default");

@@ -19,6 +19,7 @@ use hybrid_rt::accel::bvh::{SceneBvh, accept_all, closest_hit};
 use hybrid_rt::backend::Backend;
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes;
 use hybrid_rt::passes::{gbuffer::NO_ID, primary_rays};
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, morph_test_facts as facts};
@@ -55,7 +56,13 @@ fn render(ctx: &Arc<Context>, backend: Backend) -> (Renderer, Vec<Vec<CpuImage>>
     for frame in 0..FRAMES {
         r.render_frame().unwrap();
         if CHECKED.contains(&frame) {
-            let names = [primary_rays::HIT, primary_rays::DEPTH, "gbuffer.ids", "gbuffer.depth", primary_rays::BARY];
+            let names = [
+                primary_rays::HIT,
+                primary_rays::DEPTH,
+                passes::gbuffer::IDS,
+                passes::gbuffer::DEPTH,
+                primary_rays::BARY,
+            ];
             images.push(r.read_outputs(&names).unwrap());
         }
     }

@@ -16,6 +16,8 @@ mod common;
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::metrics;
+use hybrid_rt::passes;
+use hybrid_rt::passes::svgf::{self, atrous};
 use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, checker_test_facts as facts};
 use hybrid_rt::scene::{LoadOptions, Scene, load_gltf};
@@ -48,8 +50,7 @@ fn reference(ctx: &Arc<Context>, scene: Scene, spp: u32) -> CpuImage {
     for _ in 0..spp {
         r.render_frame().unwrap();
     }
-    let out = r.hdr_output().to_string();
-    r.read_output(&out).unwrap()
+    r.read_output(r.hdr_output()).unwrap()
 }
 
 fn rel_mse(test: &CpuImage, truth: &CpuImage) -> f64 {
@@ -67,7 +68,7 @@ fn albedo_checkerboard_stays_sharp() {
     for _ in 0..16 {
         r.render_frame().unwrap();
     }
-    let imgs = r.read_outputs(&["composite.color", "gbuffer.base_color", "gbuffer.ids"]).unwrap();
+    let imgs = r.read_outputs(&[passes::composite::COLOR, passes::gbuffer::BASE_COLOR, passes::gbuffer::IDS]).unwrap();
     let (l, albedo) = (lum(&imgs[0]), lum(&imgs[1]));
     // Light on the wall varies slowly; the albedo jumps by 8x between cells. Compare each
     // pixel with its right neighbour across every cell edge: the image must jump as the albedo
@@ -106,7 +107,7 @@ fn denoised_frames_keep_energy_and_beat_raw_noise() {
     let mut raw = renderer(&ctx, scene(), settings(false));
     raw.render_frame().unwrap();
     // One raw frame: no denoiser, no history (TAA's output equals its input on the first frame).
-    let raw_error = rel_mse(&raw.read_output("taa.color").unwrap(), &truth);
+    let raw_error = rel_mse(&raw.read_output(passes::taa::COLOR).unwrap(), &truth);
     drop(raw);
 
     let mut den = renderer(&ctx, scene(), settings(true));
@@ -115,7 +116,7 @@ fn denoised_frames_keep_energy_and_beat_raw_noise() {
     for frame in 1..=64u32 {
         den.render_frame().unwrap();
         if [1, 16, 64].contains(&frame) {
-            let img = den.read_output("taa.color").unwrap();
+            let img = den.read_output(passes::taa::COLOR).unwrap();
             errors.push((frame, rel_mse(&img, &truth)));
             last = Some(img);
         }
@@ -193,9 +194,9 @@ fn curved_surfaces_are_not_faceted() {
         r.render_frame().unwrap();
     }
     let last = hybrid_rt::passes::svgf::SvgfSettings::default().iterations - 1;
-    let diffuse = format!("svgf_atrous_diffuse_{last}.color");
-    let specular = format!("svgf_atrous_specular_{last}.color");
-    let names = ["gbuffer.normal_geo", "gbuffer.ids", &diffuse, &specular, "taa.color"];
+    let diffuse = atrous::COLOR.of(svgf::iteration("diffuse", last));
+    let specular = atrous::COLOR.of(svgf::iteration("specular", last));
+    let names = [passes::gbuffer::NORMAL_GEO, passes::gbuffer::IDS, diffuse, specular, passes::taa::COLOR];
     let imgs = r.read_outputs(&names).unwrap();
     let (ng, ids) = (&imgs[0], &imgs[1]);
     for (what, img, instance) in [

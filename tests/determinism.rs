@@ -12,7 +12,9 @@ mod common;
 
 use hybrid_rt::backend::Backend;
 use hybrid_rt::gpu::ShaderLibrary;
+use hybrid_rt::graph::Resource;
 use hybrid_rt::image_io::{CpuImage, Texels};
+use hybrid_rt::passes;
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use std::path::Path;
 use std::process::Command;
@@ -46,13 +48,12 @@ fn same_settings_and_seed_give_identical_frames_on_each_backend() {
                 r.render_frame().unwrap();
             }
             let names = r.graph.output_order.clone();
-            let refs: Vec<&str> = names.iter().map(String::as_str).collect();
-            let images = r.read_outputs(&refs).unwrap();
+            let images = r.read_outputs(&names).unwrap();
             names.into_iter().zip(images.iter().map(bits)).collect::<Vec<_>>()
         };
         let (a, b) = (run(), run());
-        let names: Vec<&str> = a.iter().map(|(n, _)| n.as_str()).collect();
-        for expected in ["composite.color", "tonemap.color"] {
+        let names: Vec<Resource> = a.iter().map(|(n, _)| *n).collect();
+        for expected in [passes::composite::COLOR.into(), passes::tonemap::COLOR.into()] {
             assert!(names.contains(&expected), "no {expected} among {names:?}");
         }
         for ((name, x), (_, y)) in a.iter().zip(&b) {

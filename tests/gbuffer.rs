@@ -5,6 +5,7 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use hybrid_rt::gpu::ShaderLibrary;
+use hybrid_rt::passes;
 use hybrid_rt::passes::gbuffer::NO_ID;
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
@@ -33,7 +34,13 @@ fn gbuffer_matches_analytic_plane_sphere_and_motion() {
     let mut r = renderer(&ctx, 0.4);
     r.render_frame().unwrap();
     r.render_frame().unwrap();
-    let names = ["gbuffer.depth", "gbuffer.normal", "gbuffer.normal_geo", "gbuffer.motion", "gbuffer.ids"];
+    let names = [
+        passes::gbuffer::DEPTH,
+        passes::gbuffer::NORMAL,
+        passes::gbuffer::NORMAL_GEO,
+        passes::gbuffer::MOTION,
+        passes::gbuffer::IDS,
+    ];
     let imgs = r.read_outputs(&names).unwrap();
     let (depth, normal, normal_geo, motion, ids) = (&imgs[0], &imgs[1], &imgs[2], &imgs[3], &imgs[4]);
     let view = r.last_view.unwrap();

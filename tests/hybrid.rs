@@ -25,6 +25,7 @@ mod common;
 
 use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes;
 use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
 use hybrid_rt::scene::{LoadOptions, load_gltf};
 
@@ -59,8 +60,7 @@ fn reference(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, base: &Settings, see
     for _ in 0..FRAMES {
         r.render_frame().unwrap();
     }
-    let out = r.hdr_output().to_string();
-    luminance(&rgb(&r.read_output(&out).unwrap()))
+    luminance(&rgb(&r.read_output(r.hdr_output()).unwrap()))
 }
 
 fn rgb(img: &CpuImage) -> Vec<[f64; 3]> {
@@ -84,7 +84,7 @@ fn accumulated_hybrid_frames_approach_the_two_bounce_reference() {
     let mut sum = vec![[0.0f64; 3]; (SIZE * SIZE) as usize];
     for _ in 0..FRAMES {
         hybrid.render_frame().unwrap();
-        let frame = rgb(&hybrid.read_output("composite.color").unwrap());
+        let frame = rgb(&hybrid.read_output(passes::composite::COLOR).unwrap());
         for (s, f) in sum.iter_mut().zip(frame) {
             for c in 0..3 {
                 s[c] += f[c] / FRAMES as f64;

@@ -12,6 +12,7 @@ mod common;
 use glam::{Quat, Vec3};
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes;
 use hybrid_rt::passes::gbuffer::NO_ID;
 use hybrid_rt::passes::gi::GiSettings;
 use hybrid_rt::passes::pathtrace;
@@ -115,8 +116,7 @@ fn hybrid(ctx: &Arc<Context>, scene: Scene, env: Environment) -> Picture {
     for _ in 0..FRAMES {
         r.render_frame().unwrap();
     }
-    let hdr_name = r.hdr_output().to_owned();
-    let mut images = r.read_outputs(&[&hdr_name, "gbuffer.ids"]).unwrap();
+    let mut images = r.read_outputs(&[r.hdr_output(), passes::gbuffer::IDS]).unwrap();
     let ids = images.remove(1);
     let hdr = images.remove(0);
     Picture { hdr, ids, lighting: r.lighting.clone(), view: r.last_view.unwrap() }

@@ -10,6 +10,7 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use hybrid_rt::gpu::ShaderLibrary;
+use hybrid_rt::passes;
 use hybrid_rt::passes::shadows::{HARD_VISIBILITY, ShadowSettings, VISIBILITY};
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, shadow_test_facts as facts};
@@ -84,7 +85,9 @@ fn soft_shadows_converge_with_adaptive_counts() {
     let settings = ShadowSettings::default();
     let mut r = renderer(&ctx, builtin::soft_shadow_test(), settings);
     r.render_frame().unwrap();
-    let first = r.read_outputs(&["gbuffer.ids", "shadows.ring0", "shadows.sample_count"]).unwrap();
+    let first = r
+        .read_outputs(&[passes::gbuffer::IDS, passes::shadows::trace::RING0, passes::shadows::trace::SAMPLE_COUNT])
+        .unwrap();
     // Frame 1: nothing cached, so every lit floor pixel traced s_max rays.
     let points = floor_points(&r, &first[0]);
     for &(x, y, _) in &points {
@@ -95,7 +98,8 @@ fn soft_shadows_converge_with_adaptive_counts() {
     for _ in 0..25 {
         r.render_frame().unwrap();
     }
-    let imgs = r.read_outputs(&[VISIBILITY, "shadows.sample_count", "shadows.ring0"]).unwrap();
+    let imgs =
+        r.read_outputs(&[VISIBILITY, passes::shadows::trace::SAMPLE_COUNT, passes::shadows::trace::RING0]).unwrap();
     // Errors over the penumbra, where there is something to get wrong.
     let (mut err_filtered, mut err_raw, mut n) = (0.0f64, 0.0f64, 0);
     let (mut penumbra_counts, mut penumbra_px, mut open_ones, mut open_px) = (0.0f64, 0, 0, 0);
@@ -133,7 +137,7 @@ fn soft_shadows_converge_with_adaptive_counts() {
     // A camera cut invalidates every cache: all sampled pixels go to s_max.
     r.camera_cut();
     r.render_frame().unwrap();
-    let counts = r.read_output("shadows.sample_count").unwrap();
+    let counts = r.read_output(passes::shadows::trace::SAMPLE_COUNT).unwrap();
     for &(x, y, _) in &points {
         assert_eq!(counts.get(x, y, 0), settings.s_max as f32, "after the cut at ({x},{y})");
     }
@@ -149,7 +153,7 @@ fn a_tight_budget_lowers_the_counts() {
     for _ in 0..4 {
         r.render_frame().unwrap();
     }
-    let counts = r.read_output("shadows.sample_count").unwrap();
+    let counts = r.read_output(passes::shadows::trace::SAMPLE_COUNT).unwrap();
     let max = (0..W * H).map(|i| counts.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
     assert!(max < tight.s_max as f32, "the budget did not cap the counts (max {max})");
     drop(r);
@@ -164,7 +168,7 @@ fn hard_lights_use_one_ray_and_no_filter() {
     r.render_frame().unwrap();
     assert_eq!(r.shadow_visibility(), HARD_VISIBILITY);
     assert!(!r.graph.pass_names().iter().any(|p| p.starts_with("shadows_")), "{:?}", r.graph.pass_names());
-    let counts = r.read_output("shadows.sample_count").unwrap();
+    let counts = r.read_output(passes::shadows::trace::SAMPLE_COUNT).unwrap();
     for y in 0..H {
         for x in 0..W {
             let c = counts.get(x, y, 0);
@@ -178,7 +182,13 @@ fn hard_lights_use_one_ray_and_no_filter() {
         r.render_frame().unwrap();
     }
     let imgs = r
-        .read_outputs(&["gbuffer.ids", "shadows.sample_count", "shadows_filter.kernel", "shadows.ring0", VISIBILITY])
+        .read_outputs(&[
+            passes::gbuffer::IDS,
+            passes::shadows::trace::SAMPLE_COUNT,
+            passes::shadows::filter::KERNEL,
+            passes::shadows::trace::RING0,
+            VISIBILITY,
+        ])
         .unwrap();
     for y in 0..H {
         for x in 0..W {

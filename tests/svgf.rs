@@ -9,13 +9,16 @@
 mod common;
 
 use hybrid_rt::gpu::ShaderLibrary;
-use hybrid_rt::passes::svgf::SvgfSettings;
-use hybrid_rt::render::{CameraChoice, Renderer, Settings, frame::TEST_SIGNAL};
+use hybrid_rt::graph::Output;
+use hybrid_rt::passes;
+use hybrid_rt::passes::svgf::{self, SvgfSettings};
+use hybrid_rt::render::frame::{TEST_INPUT, TEST_SIGNAL};
+use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
 
 const W: u32 = 64;
 const H: u32 = 48;
-const INPUT: &str = "inject.signal";
+const INPUT: Output = TEST_INPUT;
 
 fn renderer(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, denoise: SvgfSettings) -> Renderer {
     renderer_with(ctx, denoise, Settings::default().frame_dt)
@@ -30,12 +33,13 @@ fn renderer_with(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, denoise: SvgfSet
         .unwrap()
 }
 
-fn out(name: &str, what: &str) -> String {
-    format!("{name}_{TEST_SIGNAL}.{what}")
+/// An output of the test signal's temporal stage (`svgf_temporal_signal.<output>`).
+fn temporal(output: Output) -> Output {
+    output.of(svgf::signal(TEST_SIGNAL))
 }
 
-fn atrous(i: u32) -> String {
-    format!("svgf_atrous_{TEST_SIGNAL}_{i}.color")
+fn atrous(i: u32) -> Output {
+    svgf::atrous::COLOR.of(svgf::iteration(TEST_SIGNAL, i))
 }
 
 /// Every luminance weight is 1 and nothing is clamped: only the kernel and geometry act.
@@ -53,8 +57,7 @@ fn atrous_impulse_response_is_the_b3_kernel_and_keeps_energy() {
     texels[(cy * W + cx) as usize] = [100.0, 100.0, 100.0, 1.0];
     r.inject(INPUT, texels).unwrap();
     r.render_frame().unwrap();
-    let names = [atrous(0), atrous(1), "gbuffer.ids".to_string()];
-    let imgs = r.read_outputs(&names.iter().map(String::as_str).collect::<Vec<_>>()).unwrap();
+    let imgs = r.read_outputs(&[atrous(0), atrous(1), passes::gbuffer::IDS]).unwrap();
     let b3 = [1.0 / 16.0, 1.0 / 4.0, 3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0];
     for dy in -4i32..=4 {
         for dx in -4i32..=4 {
@@ -93,14 +96,14 @@ fn signal_does_not_leak_across_geometric_edges() {
     let mut r = renderer_with(&ctx, no_luminance_stopping(), 0.0);
     // Bright on the sphere, dark on the plane: only depth and normal weights can keep it apart.
     r.render_frame().unwrap();
-    let ids = r.read_output("gbuffer.ids").unwrap();
+    let ids = r.read_output(passes::gbuffer::IDS).unwrap();
     let texels: Vec<[f32; 4]> = (0..W * H)
         .map(|i| if ids.get_u32(i % W, i / W, 0) == facts::SPHERE_INSTANCE { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] })
         .collect();
     r.inject(INPUT, texels).unwrap();
     r.camera_cut();
     r.render_frame().unwrap();
-    let filtered = r.read_output(&atrous(3)).unwrap();
+    let filtered = r.read_output(atrous(3)).unwrap();
     let (mut leak, mut kept) = (0.0f32, f32::INFINITY);
     for y in 0..H {
         for x in 0..W {
@@ -133,8 +136,8 @@ fn nan_and_fireflies_stay_out_of_the_history() {
         r.inject(INPUT, texels).unwrap();
         r.render_frame().unwrap();
     }
-    let names = [out("svgf_temporal", "color"), out("svgf_temporal", "rejected"), atrous(3)];
-    let imgs = r.read_outputs(&names.iter().map(String::as_str).collect::<Vec<_>>()).unwrap();
+    let names = [temporal(svgf::temporal::COLOR), temporal(svgf::temporal::REJECTED), atrous(3)];
+    let imgs = r.read_outputs(&names).unwrap();
     assert_eq!(imgs[1].get_u32(0, 0, 0), 8, "two non-finite samples in each of 4 frames are counted");
     for img in [&imgs[0], &imgs[2]] {
         let worst = (0..W * H)
@@ -157,14 +160,14 @@ fn history_restarts_on_disocclusion_and_camera_cut() {
     let mut always_plane = vec![true; (W * H) as usize];
     for _ in 0..5 {
         r.render_frame().unwrap();
-        let ids = r.read_output("gbuffer.ids").unwrap();
+        let ids = r.read_output(passes::gbuffer::IDS).unwrap();
         for (i, a) in always_plane.iter_mut().enumerate() {
             *a &= ids.get_u32(i as u32 % W, i as u32 / W, 0) == facts::PLANE_INSTANCE;
         }
     }
-    let before = r.read_output("gbuffer.ids").unwrap();
+    let before = r.read_output(passes::gbuffer::IDS).unwrap();
     r.render_frame().unwrap();
-    let imgs = r.read_outputs(&["gbuffer.ids", &out("svgf_temporal", "history_length")]).unwrap();
+    let imgs = r.read_outputs(&[passes::gbuffer::IDS, temporal(svgf::temporal::HISTORY_LENGTH)]).unwrap();
     let (mut uncovered, mut steady) = (0, 0);
     for y in 0..H {
         for x in 0..W {
@@ -182,7 +185,7 @@ fn history_restarts_on_disocclusion_and_camera_cut() {
     assert!(uncovered > 0 && steady > 500, "uncovered {uncovered}, steady {steady}");
     r.camera_cut();
     r.render_frame().unwrap();
-    let len = r.read_output(&out("svgf_temporal", "history_length")).unwrap();
+    let len = r.read_output(temporal(svgf::temporal::HISTORY_LENGTH)).unwrap();
     let longest = (0..W * H).map(|i| len.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
     assert_eq!(longest, 1.0, "after a camera cut every history restarts");
     drop(r);

@@ -6,6 +6,7 @@ mod common;
 
 use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::image_io::CpuImage;
+use hybrid_rt::passes;
 use hybrid_rt::render::{CameraChoice, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
 
@@ -36,7 +37,7 @@ fn static_view_antialiases_edges_and_keeps_flat_regions() {
     for _ in 0..16 {
         r.render_frame().unwrap();
     }
-    let imgs = r.read_outputs(&["taa.color", "composite.color", "gbuffer.ids"]).unwrap();
+    let imgs = r.read_outputs(&[passes::taa::COLOR, passes::composite::COLOR, passes::gbuffer::IDS]).unwrap();
     let (taa, raw, ids) = (&imgs[0], &imgs[1], &imgs[2]);
     // Flat plane interior: the same brightness with and without TAA.
     let (mut flat_taa, mut flat_raw, mut n) = (0.0f64, 0.0f64, 0);
@@ -77,9 +78,9 @@ fn disocclusion_and_camera_cut_drop_the_history() {
     for _ in 0..8 {
         r.render_frame().unwrap();
     }
-    let before = r.read_output("gbuffer.ids").unwrap();
+    let before = r.read_output(passes::gbuffer::IDS).unwrap();
     r.render_frame().unwrap();
-    let imgs = r.read_outputs(&["taa.color", "composite.color", "gbuffer.ids"]).unwrap();
+    let imgs = r.read_outputs(&[passes::taa::COLOR, passes::composite::COLOR, passes::gbuffer::IDS]).unwrap();
     let mut uncovered = 0;
     for y in 0..H {
         for x in 0..W {
@@ -93,7 +94,7 @@ fn disocclusion_and_camera_cut_drop_the_history() {
     assert!(uncovered > 0, "the cube uncovered nothing");
     r.camera_cut();
     r.render_frame().unwrap();
-    let imgs = r.read_outputs(&["taa.color", "composite.color"]).unwrap();
+    let imgs = r.read_outputs(&[passes::taa::COLOR, passes::composite::COLOR]).unwrap();
     for y in 0..H {
         for x in 0..W {
             assert_eq!(imgs[0].get(x, y, 0), imgs[1].get(x, y, 0), "history survived the cut at ({x},{y})");

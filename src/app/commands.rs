@@ -5,6 +5,7 @@ use super::camera::Mode;
 use super::script::Command;
 use super::{Viewer, tunables, ui};
 use crate::capture::Capture;
+use crate::graph::Resource;
 use crate::render::CameraChoice;
 use anyhow::{Result, bail};
 use std::collections::VecDeque;
@@ -27,7 +28,10 @@ impl Viewer {
             };
             match cmd {
                 Command::Frames(n) => self.frames_left = n,
-                Command::View(name) => self.set_view(&name)?,
+                Command::View(name) => {
+                    let view = self.renderer.graph.resource_named(&name)?;
+                    self.set_view(view)?
+                }
                 Command::Screenshot(path) => {
                     if !self.present(Some(&path))? {
                         // Nothing was drawn (the swapchain was being rebuilt): again next time.
@@ -64,18 +68,18 @@ impl Viewer {
         }
     }
 
-    pub(super) fn set_view(&mut self, name: &str) -> Result<()> {
-        if self.renderer.graph.image(name).is_none() {
-            bail!("no pass output named {name}; the frame has: {}", self.renderer.graph.output_order.join(", "));
+    pub(super) fn set_view(&mut self, view: Resource) -> Result<()> {
+        if self.renderer.graph.image(view).is_none() {
+            bail!("no pass output named {view} in this frame");
         }
-        self.view = name.to_string();
+        self.view = view;
         Ok(())
     }
 
     /// What the overlay asked for; failures become its message (interactive use goes on).
     pub(super) fn ui_action(&mut self, action: ui::Action) {
         let result = match action {
-            ui::Action::View(name) => self.set_view(&name),
+            ui::Action::View(view) => self.set_view(view),
             ui::Action::SceneCamera(i) => {
                 self.camera.mode = Mode::Scene;
                 self.renderer.set_camera(&CameraChoice::Index(i))

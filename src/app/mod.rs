@@ -22,11 +22,11 @@ mod ui;
 use crate::backend::{self, Backend, BackendChoice};
 use crate::capture;
 use crate::gpu::{Context, ContextOptions, Presenter, ShaderLibrary, Shown, Swapchain, vk};
-use crate::graph::Preview;
+use crate::graph::{Preview, Resource};
 use crate::image_io;
 use crate::render::{CameraChoice, Renderer, Settings};
 use crate::scene::Scene;
-use anyhow::{Context as _, Result, anyhow, bail};
+use anyhow::{Context as _, Result, anyhow};
 use camera::{Controller, Mode};
 use glam::Vec3;
 use input::Input;
@@ -57,8 +57,8 @@ pub struct ViewOptions {
     /// Run these commands, then stay interactive unless one was `quit`.
     pub script: Option<Vec<Command>>,
     pub vsync: bool,
-    /// The output shown first.
-    pub view: String,
+    /// The output shown first, as the user typed it (`None`: the tonemapped image).
+    pub view: Option<String>,
     pub ui: bool,
     /// Where screenshots and capture dumps go when no path is given.
     pub out_dir: PathBuf,
@@ -161,7 +161,7 @@ struct Viewer {
     clock: Clock,
     /// The overlay's copy of the settings, applied when it differs from the renderer's.
     edit: Settings,
-    view: String,
+    view: Resource,
     ui_visible: bool,
     script: Option<VecDeque<Command>>,
     frames_left: u32,
@@ -197,9 +197,10 @@ impl Viewer {
         let cameras = opts.scene.cameras.iter().map(|c| c.name.clone()).collect();
         let edit = opts.settings.clone();
         let renderer = Renderer::new(&ctx, &shaders, opts.scene, opts.settings, &opts.camera, backend)?;
-        if renderer.graph.image(&opts.view).is_none() {
-            bail!("--view {}: no such output; the frame has: {}", opts.view, renderer.graph.output_order.join(", "));
-        }
+        let view = match &opts.view {
+            Some(name) => renderer.graph.resource_named(name).context("--view")?,
+            None => crate::render::DISPLAY_OUTPUT.into(),
+        };
         let size = window.inner_size();
         let swapchain = Swapchain::new(&ctx, display, handle, (size.width, size.height), opts.vsync)?;
         let presenter = Presenter::new(&ctx, &shaders, swapchain.format)?;
@@ -232,7 +233,7 @@ impl Viewer {
             cameras,
             clock: Clock { playing: true, steps: 0 },
             edit,
-            view: opts.view,
+            view,
             ui_visible: opts.ui,
             script: opts.script.map(VecDeque::from),
             frames_left: 0,
@@ -294,8 +295,8 @@ impl Viewer {
         if let Some(path) = screenshot {
             image_io::check_overwrite(path, self.force)?;
         }
-        let name = self.view.clone();
-        let desc = self.renderer.graph.images.desc(&name).ok_or_else(|| anyhow!("no pass output named {name}"))?;
+        let name = self.view;
+        let desc = self.renderer.graph.images.desc(name).ok_or_else(|| anyhow!("no pass output named {name}"))?;
         // The tonemap output is display-encoded RGBA8 already and is read in place; any other
         // output goes through the capture's preview, so it looks exactly like its PNG.
         let in_place = desc.preview == Preview::Display && desc.format == vk::Format::R8G8B8A8_UNORM;
@@ -303,7 +304,7 @@ impl Viewer {
             None
         } else {
             let preview = desc.preview;
-            let img = self.renderer.read_output(&name)?;
+            let img = self.renderer.read_output(name)?;
             Some((img.width, img.height, capture::preview(&img, preview)))
         };
         let (overlay, actions) = if self.ui_visible { self.run_ui() } else { (None, Vec::new()) };
@@ -312,7 +313,7 @@ impl Viewer {
         }
         let shown = match &cpu {
             Some((width, height, texels)) => Shown::Rgba { width: *width, height: *height, texels },
-            None => Shown::Graph(self.renderer.graph.image(&name).expect("checked above")),
+            None => Shown::Graph(self.renderer.graph.image(name).expect("checked above")),
         };
         let overlay = overlay.as_ref().map(|(primitives, textures, ppp)| OverlayFrame::new(primitives, textures, *ppp));
         let overlay = overlay.as_ref().map(OverlayFrame::overlay);
@@ -345,7 +346,7 @@ impl Viewer {
             pass_times: &self.renderer.last_pass_times,
             frame_wall_ms: self.renderer.last_frame_wall_ms,
             outputs: &self.renderer.graph.output_order,
-            view: &self.view,
+            view: self.view,
             cameras: &self.cameras,
             scene_camera: self.renderer.camera_index(),
             camera_mode: self.camera.mode,

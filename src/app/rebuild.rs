@@ -64,8 +64,8 @@ impl Viewer {
 
     /// The shown output may be gone after a rebuild (TAA off removes `taa.color`).
     pub(super) fn fall_back_view(&mut self) {
-        if self.renderer.graph.image(&self.view).is_none() {
-            self.view = crate::render::DISPLAY_OUTPUT.to_string();
+        if self.renderer.graph.image(self.view).is_none() {
+            self.view = crate::render::DISPLAY_OUTPUT.into();
         }
     }
 

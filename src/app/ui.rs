@@ -4,7 +4,7 @@
 
 use super::camera::Mode;
 use super::tunables::{self, Kind};
-use crate::graph::PassTime;
+use crate::graph::{PassTime, Resource};
 use crate::render::Settings;
 
 /// What the overlay shows about the running viewer.
@@ -16,8 +16,8 @@ pub struct Info<'a> {
     /// The last frame's wall clock, recording to fence (timestamps can miss compute passes).
     pub frame_wall_ms: f64,
     /// Every named output of the frame, in capture order.
-    pub outputs: &'a [String],
-    pub view: &'a str,
+    pub outputs: &'a [Resource],
+    pub view: Resource,
     /// The scene's cameras by name.
     pub cameras: &'a [String],
     pub scene_camera: Option<usize>,
@@ -39,7 +39,7 @@ pub struct Info<'a> {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Action {
-    View(String),
+    View(Resource),
     SceneCamera(usize),
     CameraMode(Mode),
     Play(bool),
@@ -84,10 +84,10 @@ pub fn draw(ctx: &egui::Context, info: &Info, settings: &mut Settings) -> Vec<Ac
                 ui.small(info.message);
             }
 
-            let mut view = info.view.to_string();
-            egui::ComboBox::from_label("view").selected_text(&view).height(400.0).show_ui(ui, |ui| {
+            let mut view = info.view;
+            egui::ComboBox::from_label("view").selected_text(view.to_string()).height(400.0).show_ui(ui, |ui| {
                 for name in info.outputs {
-                    ui.selectable_value(&mut view, name.clone(), name);
+                    ui.selectable_value(&mut view, *name, name.to_string());
                 }
             });
             if view != info.view {

@@ -14,6 +14,7 @@ use crate::backend::Backend;
 use crate::gpu::{Context, ShaderLibrary};
 use crate::image_io::CpuImage;
 use crate::metrics::luminance;
+use crate::passes::gbuffer;
 use crate::passes::shadows::HARD_VISIBILITY;
 use crate::render::{CameraChoice, Renderer, Settings, ViewOverride};
 use crate::scene::Scene;
@@ -148,8 +149,8 @@ fn renderer(rig: &Rig, scene: Scene, denoised: bool, start_time: f32, camera: us
 /// Renders a frame and returns its linear HDR luminance.
 fn next_luminance(r: &mut Renderer) -> Result<Vec<f32>> {
     r.render_frame()?;
-    let out = r.hdr_output().to_string();
-    Ok(plane(&r.read_output(&out)?))
+    let out = r.hdr_output();
+    Ok(plane(&r.read_output(out)?))
 }
 
 fn plane(img: &CpuImage) -> Vec<f32> {
@@ -282,7 +283,7 @@ pub fn moving_object(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     let mut seen: Vec<(Vec<f32>, Vec<u32>)> = Vec::new();
     for _ in 0..frames {
         let l = next_luminance(&mut r)?;
-        seen.push((l, ids(&r.read_output("gbuffer.ids")?)));
+        seen.push((l, ids(&r.read_output(gbuffer::IDS)?)));
     }
     let n = seen[0].0.len();
     let background: Vec<f32> =
@@ -400,7 +401,7 @@ pub fn leaking(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     for _ in 0..6 {
         outside = next_luminance(&mut r)?;
     }
-    let id = ids(&r.read_output("gbuffer.ids")?);
+    let id = ids(&r.read_output(gbuffer::IDS)?);
     let (w, h) = (rig.width as i64, rig.height as i64);
     let mut lit: Vec<f32> = (0..id.len()).filter(|&i| id[i] == PLUS_X_INSTANCE).map(|i| outside[i]).collect();
     let lit = median(&mut lit) as f64;
@@ -450,7 +451,7 @@ pub fn grazing_floor(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
         if frame < 4 {
             continue;
         }
-        let imgs = r.read_outputs(&["gbuffer.ids", "gbuffer.normal", HARD_VISIBILITY])?;
+        let imgs = r.read_outputs(&[gbuffer::IDS, gbuffer::NORMAL, HARD_VISIBILITY])?;
         let (id, view) = (ids(&imgs[0]), r.last_view.context("no view after a frame")?);
         let mut open = Vec::new();
         for (i, &inst) in id.iter().enumerate() {
@@ -505,7 +506,7 @@ pub fn fireflies(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     for _ in 0..8 {
         l = next_luminance(&mut r)?;
     }
-    let emissive = plane(&r.read_output("gbuffer.emissive")?);
+    let emissive = plane(&r.read_output(gbuffer::EMISSIVE)?);
     let (w, h) = (rig.width as i64, rig.height as i64);
     let mut outliers = 0usize;
     let mut counted = 0usize;

@@ -153,8 +153,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     bar.finish_and_clear();
 
     if ext.as_deref() == Some("exr") {
-        let hdr = renderer.hdr_output().to_owned();
-        let img = renderer.read_output(&hdr)?;
+        let img = renderer.read_output(renderer.hdr_output())?;
         image_io::write_exr(&a.out, &img, image_io::channel_names(img.channels))?;
     } else {
         let img = renderer.read_output(render::DISPLAY_OUTPUT)?;

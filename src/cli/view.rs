@@ -2,7 +2,7 @@
 
 use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::app::{self, ViewOptions, script};
-use crate::render::{self, CameraChoice, Settings};
+use crate::render::{CameraChoice, Settings};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
@@ -20,9 +20,10 @@ pub struct ViewArgs {
     /// Scene camera by name or index (default: the first camera, or a framing camera).
     #[arg(long)]
     camera: Option<CameraChoice>,
-    /// The pass output shown first (any name `render --dump-passes` writes).
-    #[arg(long, default_value = render::DISPLAY_OUTPUT)]
-    view: String,
+    /// The pass output shown first (any name `render --dump-passes` writes; default: the
+    /// tonemapped image).
+    #[arg(long)]
+    view: Option<String>,
     /// Turn temporal anti-aliasing off (it is on by default, as in `render`).
     #[arg(long)]
     no_taa: bool,

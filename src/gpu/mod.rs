@@ -55,7 +55,7 @@ pub use present::{
 };
 pub use recorder::Recorder;
 pub use sampler::{Sampler, SamplerDesc};
-pub use shader::ShaderLibrary;
+pub use shader::{RAY_VARIANTS, ShaderLibrary};
 pub use swapchain::{Swapchain, Target};
 pub use timestamps::TimestampPool;
 pub use validation::{ValidationLog, finish_validation};

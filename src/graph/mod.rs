@@ -4,7 +4,10 @@
 //! those declarations, times each pass with GPU timestamps, and hands any named output to the
 //! capture. A new pass gets barriers, timing and dumps by declaring its outputs.
 
+mod resource;
 mod sync;
+
+pub use resource::{Instance, Output, Resource};
 
 use crate::gpu::{self, Context, Image, Recorder, TimestampPool, vk};
 use crate::render::SceneGpu;
@@ -48,8 +51,8 @@ pub enum Usage {
 
 #[derive(Clone, Debug)]
 pub struct OutputDesc {
-    /// `pass.output`, the name used everywhere: shader comments, capture files, UI.
-    pub name: String,
+    /// The image's typed name (shown as `pass.output` in capture files and the viewer).
+    pub name: Resource,
     pub format: vk::Format,
     pub usage: Usage,
     pub preview: Preview,
@@ -58,8 +61,8 @@ pub struct OutputDesc {
 }
 
 impl OutputDesc {
-    pub fn storage(pass: &str, output: &str, format: vk::Format, preview: Preview) -> Self {
-        Self { name: format!("{pass}.{output}"), format, usage: Usage::Storage, preview, extent: None }
+    pub fn storage(output: Output, format: vk::Format, preview: Preview) -> Self {
+        Self { name: output.into(), format, usage: Usage::Storage, preview, extent: None }
     }
 
     pub fn with_extent(mut self, width: u32, height: u32) -> Self {
@@ -85,8 +88,8 @@ pub struct PassDesc {
     /// (`svgf_atrous_diffuse_0`).
     pub name: String,
     pub kind: PassKind,
-    /// Named images this pass reads (outputs of passes before it, or of itself last frame).
-    pub inputs: Vec<String>,
+    /// Images this pass reads (outputs of passes before it, or of itself last frame).
+    pub inputs: Vec<Resource>,
     pub outputs: Vec<OutputDesc>,
 }
 
@@ -102,24 +105,40 @@ pub struct PassContext<'a> {
 pub trait Pass {
     fn desc(&self) -> PassDesc;
     fn record(&mut self, ctx: &PassContext) -> Result<()>;
+    /// The shader module and the set-1 bindings and push constants this pass declares for it,
+    /// for passes that run one shader (checked against the SPIR-V by tests/shader_interface.rs).
+    fn shader_interface(&self) -> Option<ShaderInterface> {
+        None
+    }
+}
+
+/// What a pass's Rust code says its shader declares.
+#[derive(Clone, Debug)]
+pub struct ShaderInterface {
+    /// The shader module's key (`taa.comp`, `shadows.comp:compute`).
+    pub shader: String,
+    /// Set 1, in binding order: the GLSL name each binding must have, and its kind.
+    pub bindings: Vec<(String, gpu::BindingKind)>,
+    /// Bytes of the push-constant block (`size_of` the pass's `#[repr(C)]` struct).
+    pub push_constant_size: usize,
 }
 
 /// The images of a frame, by name.
 pub struct Images {
-    map: HashMap<String, (Image, OutputDesc)>,
+    map: HashMap<Resource, (Image, OutputDesc)>,
 }
 
 impl Images {
-    pub fn get(&self, name: &str) -> &Image {
-        &self.map[name].0
+    pub fn get(&self, name: impl Into<Resource>) -> &Image {
+        &self.map[&name.into()].0
     }
 
-    pub fn view(&self, name: &str) -> vk::ImageView {
+    pub fn view(&self, name: impl Into<Resource>) -> vk::ImageView {
         self.get(name).view
     }
 
-    pub fn desc(&self, name: &str) -> Option<&OutputDesc> {
-        self.map.get(name).map(|(_, d)| d)
+    pub fn desc(&self, name: impl Into<Resource>) -> Option<&OutputDesc> {
+        self.map.get(&name.into()).map(|(_, d)| d)
     }
 }
 
@@ -139,9 +158,9 @@ pub struct Graph {
     passes: Vec<Box<dyn Pass>>,
     descs: Vec<PassDesc>,
     pub images: Images,
-    /// Output names in declaration order (the capture writes them in this order).
-    pub output_order: Vec<String>,
-    sync: HashMap<String, SyncState>,
+    /// Outputs in declaration order (the capture writes them in this order).
+    pub output_order: Vec<Resource>,
+    sync: HashMap<Resource, SyncState>,
     timestamps: TimestampPool,
     initialised: bool,
     pub extent: vk::Extent2D,
@@ -164,9 +183,9 @@ impl Graph {
                 } | vk::ImageUsageFlags::SAMPLED
                     | vk::ImageUsageFlags::TRANSFER_SRC
                     | vk::ImageUsageFlags::TRANSFER_DST;
-                let image = Image::new(ctx, &o.name, o.format, o.extent.unwrap_or(extent), 1, usage)?;
-                map.insert(o.name.clone(), (image, o.clone()));
-                output_order.push(o.name.clone());
+                let image = Image::new(ctx, &o.name.to_string(), o.format, o.extent.unwrap_or(extent), 1, usage)?;
+                map.insert(o.name, (image, o.clone()));
+                output_order.push(o.name);
             }
         }
         for d in &descs {
@@ -174,15 +193,15 @@ impl Graph {
                 if map.contains_key(i) {
                     continue;
                 }
-                let Some(desc) = zero_image(i) else {
+                let Some(desc) = zero_image(*i) else {
                     bail!("frame graph: pass {} reads {i}, which no pass writes", d.name);
                 };
                 let usage = vk::ImageUsageFlags::STORAGE
                     | vk::ImageUsageFlags::SAMPLED
                     | vk::ImageUsageFlags::TRANSFER_SRC
                     | vk::ImageUsageFlags::TRANSFER_DST;
-                let image = Image::new(ctx, i, desc.format, desc.extent.unwrap_or(extent), 1, usage)?;
-                map.insert(i.clone(), (image, desc));
+                let image = Image::new(ctx, &i.to_string(), desc.format, desc.extent.unwrap_or(extent), 1, usage)?;
+                map.insert(*i, (image, desc));
             }
         }
         let timestamps = TimestampPool::new(ctx, (descs.len() as u32 * 2).max(2))?;
@@ -241,10 +260,9 @@ impl Graph {
         let ctx = PassContext { rec, images: &self.images, scene, extent: self.extent, frame_index };
         for (i, pass) in self.passes.iter_mut().enumerate().take(range.end).skip(range.start) {
             let desc = &self.descs[i];
-            let reads: Vec<(&str, Access)> =
-                desc.inputs.iter().map(|n| (n.as_str(), Access::read(desc.kind))).collect();
-            let writes: Vec<(&str, Access)> =
-                desc.outputs.iter().map(|o| (o.name.as_str(), Access::write(o.usage))).collect();
+            let reads: Vec<(Resource, Access)> = desc.inputs.iter().map(|n| (*n, Access::read(desc.kind))).collect();
+            let writes: Vec<(Resource, Access)> =
+                desc.outputs.iter().map(|o| (o.name, Access::write(o.usage))).collect();
             sync::barrier(rec, &mut self.sync, &reads, &writes);
             rec.timestamp(&self.timestamps, 2 * i as u32);
             pass.record(&ctx)?;
@@ -254,8 +272,8 @@ impl Graph {
     }
 
     /// Makes `names` readable by a transfer (for capture and read-back) after the frame.
-    pub fn prepare_readback(&mut self, rec: &Recorder, names: &[&str]) {
-        let reads: Vec<(&str, Access)> = names.iter().map(|n| (*n, Access::transfer_read())).collect();
+    pub fn prepare_readback(&mut self, rec: &Recorder, names: &[Resource]) {
+        let reads: Vec<(Resource, Access)> = names.iter().map(|n| (*n, Access::transfer_read())).collect();
         sync::barrier(rec, &mut self.sync, &reads, &[]);
     }
 
@@ -273,33 +291,40 @@ impl Graph {
         }
     }
 
-    pub fn image(&self, name: &str) -> Option<&Image> {
-        self.images.map.get(name).map(|(i, _)| i)
+    pub fn image(&self, name: impl Into<Resource>) -> Option<&Image> {
+        self.images.map.get(&name.into()).map(|(i, _)| i)
     }
 
     /// The producing pass of an output.
-    pub fn producer(&self, name: &str) -> Option<&str> {
+    pub fn producer(&self, name: Resource) -> Option<&str> {
         self.descs.iter().find(|d| d.outputs.iter().any(|o| o.name == name)).map(|d| d.name.as_str())
+    }
+
+    /// The output a person named (`--view taa.color`, a viewer script), or an error listing
+    /// every output of this frame.
+    pub fn resource_named(&self, name: &str) -> Result<Resource> {
+        if let Some(r) = self.output_order.iter().find(|r| r.to_string() == name) {
+            return Ok(*r);
+        }
+        let all: Vec<String> = self.output_order.iter().map(Resource::to_string).collect();
+        bail!("no pass output named {name}; the frame has: {}", all.join(", "))
+    }
+
+    /// The shader interface of every pass that declares one (see `tests/shader_interface.rs`).
+    pub fn shader_interfaces(&self) -> Vec<(String, ShaderInterface)> {
+        self.passes.iter().zip(&self.descs).filter_map(|(p, d)| Some((d.name.clone(), p.shader_interface()?))).collect()
     }
 }
 
-/// The name of an image that is zero everywhere and written by no pass: a stand-in a pass may read
-/// where the frame plan left out the pass that would have made the real input (for example the
-/// soft-shadow statistics when every light is punctual). `small` makes it 1x1.
-pub fn zero(format: vk::Format, small: bool) -> String {
-    format!("zero.{}{}", format.as_raw(), if small { ".1x1" } else { "" })
+/// An image that is zero everywhere and written by no pass (see [`Resource::Zero`]).
+pub fn zero(format: vk::Format, small: bool) -> Resource {
+    Resource::Zero { format, small }
 }
 
-/// The description of a `zero(...)` name, if it is one.
-fn zero_image(name: &str) -> Option<OutputDesc> {
-    let rest = name.strip_prefix("zero.")?;
-    let (raw, small) = match rest.strip_suffix(".1x1") {
-        Some(r) => (r, true),
-        None => (rest, false),
-    };
-    let format = vk::Format::from_raw(raw.parse().ok()?);
-    let desc =
-        OutputDesc { name: name.to_string(), format, usage: Usage::Storage, preview: Preview::Scalar, extent: None };
+/// The description of a zero image, if `name` is one.
+fn zero_image(name: Resource) -> Option<OutputDesc> {
+    let Resource::Zero { format, small } = name else { return None };
+    let desc = OutputDesc { name, format, usage: Usage::Storage, preview: Preview::Scalar, extent: None };
     Some(if small { desc.with_extent(1, 1) } else { desc })
 }
 

@@ -3,7 +3,7 @@
 //! (read-after-write, write-after-write, write-after-read). Images stay in GENERAL layout, so
 //! no layout transitions are needed after their first use.
 
-use super::{PassKind, Usage};
+use super::{PassKind, Resource, Usage};
 use crate::gpu::{Recorder, vk};
 use std::collections::HashMap;
 
@@ -63,13 +63,13 @@ pub struct SyncState {
 
 pub fn barrier(
     rec: &Recorder,
-    state: &mut HashMap<String, SyncState>,
-    reads: &[(&str, Access)],
-    writes: &[(&str, Access)],
+    state: &mut HashMap<Resource, SyncState>,
+    reads: &[(Resource, Access)],
+    writes: &[(Resource, Access)],
 ) {
     let (mut src_s, mut src_a, mut dst_s, mut dst_a) = (Stage::NONE, Acc::NONE, Stage::NONE, Acc::NONE);
     for (name, r) in reads {
-        let st = state.entry((*name).to_string()).or_default();
+        let st = state.entry(*name).or_default();
         if let Some(w) = st.write
             && !st.visible_to.contains(r.stage)
         {
@@ -82,7 +82,7 @@ pub fn barrier(
         st.reads |= r.stage;
     }
     for (name, w) in writes {
-        let st = state.entry((*name).to_string()).or_default();
+        let st = state.entry(*name).or_default();
         if let Some(prev) = st.write {
             src_s |= prev.stage;
             src_a |= prev.access;

@@ -3,31 +3,28 @@
 //! specular signal.
 
 use super::PassBuilder;
-use super::fullscreen::{FullscreenPass, Read};
+use super::fullscreen::{FullscreenPass, Input};
+use super::gbuffer;
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
 
 pub const NAME: &str = "composite";
-pub const COLOR: &str = "composite.color";
+pub const COLOR: Output = Output::new(NAME, "color");
 
 /// `diffuse`: demodulated diffuse light (gi, denoised or not); `specular`: the specular lobe's
 /// ray-traced light (reflections, denoised or not).
 /// `visibility`: the shadows chain's output (see shadows::Chain).
-pub fn new(b: &PassBuilder, visibility: &str, diffuse: &str, specular: &str) -> Result<FullscreenPass> {
-    let inputs = [
-        "gbuffer.depth",
-        "gbuffer.normal",
-        "gbuffer.base_color",
-        "gbuffer.metal_rough",
-        "gbuffer.emissive",
-        "gbuffer.ids",
-        visibility,
-        diffuse,
-        specular,
-    ]
-    .map(|n| (n.to_string(), Read::Texel))
-    .to_vec();
-    let outputs = vec![OutputDesc::storage(NAME, "color", vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
-    FullscreenPass::new(b, NAME, "composite.comp", inputs, outputs, Vec::new())
+pub fn new(b: &PassBuilder, visibility: Resource, diffuse: Resource, specular: Resource) -> Result<FullscreenPass> {
+    let mut inputs: Vec<Input> =
+        [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::EMISSIVE, gbuffer::IDS]
+            .map(Input::texel)
+            .to_vec();
+    inputs.extend([
+        Input::texel(visibility).bound_as("in_visibility"),
+        Input::texel(diffuse).bound_as("in_diffuse"),
+        Input::texel(specular).bound_as("in_specular"),
+    ]);
+    let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    FullscreenPass::new(b, NAME, "composite.comp", inputs, outputs, &())
 }

@@ -1,10 +1,12 @@
 //! The shape most passes share: a compute shader run once per pixel, reading named images and
-//! writing named images, bound as set 1 in declaration order (inputs first, then outputs).
+//! writing named images, bound as set 1 in declaration order (inputs first, then outputs), with
+//! the pass's `#[repr(C)]` push-constant struct.
 
 use super::PassBuilder;
 use crate::gpu::{Binding, BindingKind, DescriptorSetLayout, Pipeline, PushResource, Sampler, SamplerDesc, vk};
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind};
+use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind, Resource, ShaderInterface};
 use anyhow::Result;
+use bytemuck::Pod;
 
 /// How a shader reads an input image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -15,17 +17,66 @@ pub enum Read {
     Filtered,
 }
 
+/// One image a pass reads, and the name its shader gives the binding.
+#[derive(Clone, Debug)]
+pub struct Input {
+    resource: Resource,
+    read: Read,
+    binding: String,
+}
+
+impl Input {
+    /// Read with imageLoad, bound as the name [`binding_name`] gives it.
+    pub fn texel(resource: impl Into<Resource>) -> Self {
+        Self::new(resource.into(), Read::Texel)
+    }
+
+    /// Read with a bilinear sampler, bound as the name [`binding_name`] gives it.
+    pub fn filtered(resource: impl Into<Resource>) -> Self {
+        Self::new(resource.into(), Read::Filtered)
+    }
+
+    fn new(resource: Resource, read: Read) -> Self {
+        Self { resource, read, binding: binding_name(resource) }
+    }
+
+    /// Bound under the name of its role (`in_color`), for an input the caller chooses
+    /// (tonemap's input is composite's or taa's colour).
+    pub fn bound_as(mut self, glsl_name: &str) -> Self {
+        self.binding = glsl_name.to_string();
+        self
+    }
+
+    /// Reads `stand_in` (a zero image) in place of the planned resource, under the same binding.
+    pub fn reading(mut self, stand_in: Resource) -> Self {
+        self.resource = stand_in;
+        self
+    }
+}
+
+/// The GLSL name of the binding of `resource`: `g_<output>` for the G-buffer's, `prev_<output>`
+/// for the previous frame's copy of one, `in_<output>` for any other pass's.
+pub fn binding_name(resource: Resource) -> String {
+    match resource {
+        Resource::Output(o) if o.pass == super::gbuffer::NAME => format!("g_{}", o.name),
+        Resource::Output(o) => format!("in_{}", o.name),
+        Resource::History(o) => format!("prev_{}", o.name),
+        Resource::Zero { .. } => "zero".into(),
+    }
+}
+
 pub struct FullscreenPass {
     name: String,
+    shader: String,
     pipeline: Pipeline,
     _set_layout: DescriptorSetLayout,
     sampler: Sampler,
-    inputs: Vec<(String, Read)>,
+    inputs: Vec<Input>,
     outputs: Vec<OutputDesc>,
-    /// Push constants, rewritten by the owner before a frame when they change.
-    pub push_constants: Vec<u8>,
+    /// The bytes of the pass's push-constant struct.
+    push_constants: Vec<u8>,
     /// Outputs zeroed before the dispatch (sums the shader accumulates with atomics).
-    clears: Vec<String>,
+    clears: Vec<Resource>,
 }
 
 /// Workgroup size of every full-screen compute shader (`local_size_x/y`).
@@ -36,18 +87,15 @@ impl FullscreenPass {
         b: &PassBuilder,
         name: &str,
         shader_key: &str,
-        inputs: Vec<(String, Read)>,
+        inputs: Vec<Input>,
         outputs: Vec<OutputDesc>,
-        push_constants: Vec<u8>,
+        push_constants: &impl Pod,
     ) -> Result<Self> {
-        let mut bindings = Vec::new();
-        for (i, (_, read)) in inputs.iter().enumerate() {
-            let kind = if *read == Read::Filtered { BindingKind::SampledImage } else { BindingKind::StorageImage };
-            bindings.push(Binding { binding: i as u32, kind, count: 1 });
-        }
-        for i in 0..outputs.len() {
-            bindings.push(Binding { binding: (inputs.len() + i) as u32, kind: BindingKind::StorageImage, count: 1 });
-        }
+        let push_constants = bytemuck::bytes_of(push_constants).to_vec();
+        let bindings: Vec<Binding> = binding_kinds(&inputs, &outputs)
+            .enumerate()
+            .map(|(i, kind)| Binding { binding: i as u32, kind, count: 1 })
+            .collect();
         let set_layout = DescriptorSetLayout::new(b.ctx, &bindings, true)?;
         let spirv = b.shaders.get(shader_key)?;
         let pipeline =
@@ -55,6 +103,7 @@ impl FullscreenPass {
         let sampler = Sampler::new(b.ctx, SamplerDesc::LINEAR_CLAMP)?;
         Ok(Self {
             name: name.to_string(),
+            shader: shader_key.to_string(),
             pipeline,
             _set_layout: set_layout,
             sampler,
@@ -68,9 +117,18 @@ impl FullscreenPass {
 
 impl FullscreenPass {
     /// Zero `output` (one of this pass's outputs) before every dispatch.
-    pub fn clear_before_dispatch(&mut self, output: &str) {
-        self.clears.push(output.to_string());
+    pub fn clear_before_dispatch(&mut self, output: crate::graph::Output) {
+        self.clears.push(output.into());
     }
+}
+
+/// The descriptor kind of each binding of set 1, in binding order.
+fn binding_kinds<'a>(inputs: &'a [Input], outputs: &'a [OutputDesc]) -> impl Iterator<Item = BindingKind> + 'a {
+    let read = inputs.iter().map(|i| match i.read {
+        Read::Texel => BindingKind::StorageImage,
+        Read::Filtered => BindingKind::SampledImage,
+    });
+    read.chain(outputs.iter().map(|_| BindingKind::StorageImage))
 }
 
 impl Pass for FullscreenPass {
@@ -78,7 +136,7 @@ impl Pass for FullscreenPass {
         PassDesc {
             name: self.name.clone(),
             kind: PassKind::Compute,
-            inputs: self.inputs.iter().map(|(n, _)| n.clone()).collect(),
+            inputs: self.inputs.iter().map(|i| i.resource).collect(),
             outputs: self.outputs.clone(),
         }
     }
@@ -93,7 +151,7 @@ impl Pass for FullscreenPass {
                 (vk::PipelineStageFlags2::CLEAR, vk::AccessFlags2::TRANSFER_WRITE),
             );
             for c in &self.clears {
-                rec.clear_image(ctx.images.get(c));
+                rec.clear_image(ctx.images.get(*c));
             }
             rec.memory_barrier(
                 (vk::PipelineStageFlags2::CLEAR, vk::AccessFlags2::TRANSFER_WRITE),
@@ -106,12 +164,12 @@ impl Pass for FullscreenPass {
         let mut resources: Vec<PushResource> = self
             .inputs
             .iter()
-            .map(|(n, read)| match read {
-                Read::Texel => PushResource::StorageImage(ctx.images.view(n)),
-                Read::Filtered => PushResource::SampledImage(ctx.images.view(n), self.sampler.raw),
+            .map(|i| match i.read {
+                Read::Texel => PushResource::StorageImage(ctx.images.view(i.resource)),
+                Read::Filtered => PushResource::SampledImage(ctx.images.view(i.resource), self.sampler.raw),
             })
             .collect();
-        resources.extend(self.outputs.iter().map(|o| PushResource::StorageImage(ctx.images.view(&o.name))));
+        resources.extend(self.outputs.iter().map(|o| PushResource::StorageImage(ctx.images.view(o.name))));
         rec.bind_pipeline(&self.pipeline);
         rec.bind_scene_set(&self.pipeline, ctx.scene.set.raw);
         rec.push_set(&self.pipeline, &resources);
@@ -120,5 +178,17 @@ impl Pass for FullscreenPass {
         }
         rec.dispatch_2d(ctx.extent, GROUP);
         Ok(())
+    }
+
+    fn shader_interface(&self) -> Option<ShaderInterface> {
+        let names = self.inputs.iter().map(|i| i.binding.clone()).chain(self.outputs.iter().map(|o| match o.name {
+            Resource::Output(out) => format!("out_{}", out.name),
+            other => format!("out_{other}"),
+        }));
+        Some(ShaderInterface {
+            shader: self.shader.clone(),
+            bindings: names.zip(binding_kinds(&self.inputs, &self.outputs)).collect(),
+            push_constant_size: self.push_constants.len(),
+        })
     }
 }

@@ -3,23 +3,37 @@
 
 use super::PassBuilder;
 use crate::gpu::{Pipeline, RasterDesc, vk};
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Usage};
+use crate::graph::{Output, OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Usage};
 use anyhow::Result;
 
 pub const NAME: &str = "gbuffer";
+/// View depth and its screen-space derivative (fwidth), for the denoisers' depth tests.
+pub const DEPTH: Output = Output::new(NAME, "depth");
+/// The face normal (reprojection asks whether a sample is the same surface).
+pub const NORMAL_GEO: Output = Output::new(NAME, "normal_geo");
+/// The shading normal (normal-mapped).
+pub const NORMAL: Output = Output::new(NAME, "normal");
+pub const BASE_COLOR: Output = Output::new(NAME, "base_color");
+pub const METAL_ROUGH: Output = Output::new(NAME, "metal_rough");
+pub const EMISSIVE: Output = Output::new(NAME, "emissive");
+/// Camera and object motion, pixels.
+pub const MOTION: Output = Output::new(NAME, "motion");
+/// Instance and material id ([`NO_ID`] where no surface).
+pub const IDS: Output = Output::new(NAME, "ids");
+/// The depth attachment.
+pub const ZBUFFER: Output = Output::new(NAME, "zbuffer");
 
 /// The colour outputs in attachment order (matching `layout(location = N)` in gbuffer.frag),
-/// with their formats, previews and the clear value meaning "no surface".
-const OUTPUTS: [(&str, vk::Format, Preview); 8] = [
-    // View depth and its screen-space derivative (fwidth), for the denoisers' depth tests.
-    ("depth", vk::Format::R32G32_SFLOAT, Preview::Depth),
-    ("normal_geo", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
-    ("normal", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
-    ("base_color", vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
-    ("metal_rough", vk::Format::R8G8B8A8_UNORM, Preview::Color),
-    ("emissive", vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
-    ("motion", vk::Format::R32G32_SFLOAT, Preview::Motion),
-    ("ids", vk::Format::R32G32_UINT, Preview::Ids),
+/// with their formats and previews.
+const OUTPUTS: [(Output, vk::Format, Preview); 8] = [
+    (DEPTH, vk::Format::R32G32_SFLOAT, Preview::Depth),
+    (NORMAL_GEO, vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
+    (NORMAL, vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
+    (BASE_COLOR, vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
+    (METAL_ROUGH, vk::Format::R8G8B8A8_UNORM, Preview::Color),
+    (EMISSIVE, vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
+    (MOTION, vk::Format::R32G32_SFLOAT, Preview::Motion),
+    (IDS, vk::Format::R32G32_UINT, Preview::Ids),
 ];
 
 /// Instance and material id written where no surface was hit.
@@ -71,16 +85,12 @@ pub fn new(b: &PassBuilder) -> Result<GbufferPass> {
     Ok(GbufferPass { pipeline, draws })
 }
 
-pub fn output_name(output: &str) -> String {
-    format!("{NAME}.{output}")
-}
-
 impl Pass for GbufferPass {
     fn desc(&self) -> PassDesc {
         let mut outputs: Vec<OutputDesc> = OUTPUTS
             .iter()
             .map(|(n, f, p)| OutputDesc {
-                name: output_name(n),
+                name: (*n).into(),
                 format: *f,
                 usage: Usage::ColorAttachment,
                 preview: *p,
@@ -88,7 +98,7 @@ impl Pass for GbufferPass {
             })
             .collect();
         outputs.push(OutputDesc {
-            name: output_name("zbuffer"),
+            name: ZBUFFER.into(),
             format: vk::Format::D32_SFLOAT,
             usage: Usage::DepthAttachment,
             preview: Preview::Scalar,
@@ -101,11 +111,9 @@ impl Pass for GbufferPass {
         let rec = ctx.rec;
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
         let no_id = vk::ClearColorValue { uint32: [NO_ID; 4] };
-        let colors: Vec<_> = OUTPUTS
-            .iter()
-            .map(|(n, _, _)| (ctx.images.get(&output_name(n)), if *n == "ids" { no_id } else { zero }))
-            .collect();
-        rec.begin_rendering(ctx.extent, &colors, ctx.images.get(&output_name("zbuffer")));
+        let colors: Vec<_> =
+            OUTPUTS.iter().map(|(n, _, _)| (ctx.images.get(*n), if *n == IDS { no_id } else { zero })).collect();
+        rec.begin_rendering(ctx.extent, &colors, ctx.images.get(ZBUFFER));
         rec.bind_pipeline(&self.pipeline);
         rec.bind_scene_set(&self.pipeline, ctx.scene.set.raw);
         rec.bind_index_buffer(&ctx.scene.indices);

@@ -2,16 +2,27 @@
 //! the diffuse albedo (shaders-glsl/gi.comp).
 
 use super::PassBuilder;
-use super::fullscreen::{FullscreenPass, Read};
+use super::fullscreen::{FullscreenPass, Input};
+use super::gbuffer;
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview};
 use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
 
 pub const NAME: &str = "gi";
 /// Demodulated diffuse radiance: direct light from emitters and the environment, and indirect.
-pub const RADIANCE: &str = "gi.radiance";
+pub const RADIANCE: Output = Output::new(NAME, "radiance");
 /// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples.
-pub const SPECULAR: &str = "gi.specular";
+pub const SPECULAR: Output = Output::new(NAME, "specular");
+
+/// gi.comp's push-constant block.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct Params {
+    pub bounces: u32,
+    pub seed: u32,
+    pub roughness_cutoff: f32,
+}
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GiSettings {
@@ -27,21 +38,14 @@ impl Default for GiSettings {
 
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
 pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32) -> Result<FullscreenPass> {
-    let inputs = [
-        "gbuffer.depth",
-        "gbuffer.normal",
-        "gbuffer.normal_geo",
-        "gbuffer.base_color",
-        "gbuffer.metal_rough",
-        "gbuffer.ids",
-    ]
-    .map(|n| (n.to_string(), Read::Texel))
-    .to_vec();
+    let inputs =
+        [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::NORMAL_GEO, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::IDS]
+            .map(Input::texel)
+            .to_vec();
     let outputs = vec![
-        OutputDesc::storage(NAME, "radiance", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(NAME, "specular", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(RADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
     ];
-    let mut push: Vec<u8> = [s.bounces.max(1), seed].iter().flat_map(|v| v.to_le_bytes()).collect();
-    push.extend_from_slice(&roughness_cutoff.to_le_bytes());
-    FullscreenPass::new(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, push)
+    let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff };
+    FullscreenPass::new(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, &push)
 }

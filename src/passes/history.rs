@@ -2,8 +2,9 @@
 //! normals and ids for reprojection tests; the denoisers' feedback) into `history.*` twins.
 //! It runs last, so a pass that reads `history.x` sees the previous frame's `x`.
 
+use super::gbuffer;
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Usage};
+use crate::graph::{Output, OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Resource, Usage};
 use anyhow::Result;
 
 pub const NAME: &str = "history";
@@ -11,7 +12,7 @@ pub const NAME: &str = "history";
 /// One image kept for the next frame.
 #[derive(Clone, Debug)]
 pub struct Kept {
-    pub source: String,
+    pub source: Output,
     pub format: vk::Format,
     pub preview: Preview,
     /// Size when the source is not frame-sized.
@@ -19,8 +20,8 @@ pub struct Kept {
 }
 
 impl Kept {
-    pub fn new(source: &str, format: vk::Format, preview: Preview) -> Self {
-        Self { source: source.to_string(), format, preview, extent: None }
+    pub fn new(source: Output, format: vk::Format, preview: Preview) -> Self {
+        Self { source, format, preview, extent: None }
     }
 
     pub fn with_extent(mut self, width: u32, height: u32) -> Self {
@@ -29,17 +30,17 @@ impl Kept {
     }
 }
 
-/// The name under which the previous frame's `source` can be read.
-pub fn of(source: &str) -> String {
-    format!("{NAME}.{}", source.replace('.', "_"))
+/// The previous frame's `source` (shown as `history.<pass>_<output>`).
+pub fn of(source: Output) -> Resource {
+    Resource::History(source)
 }
 
 /// The G-buffer channels every reprojection needs.
 pub fn gbuffer() -> Vec<Kept> {
     vec![
-        Kept::new("gbuffer.depth", vk::Format::R32G32_SFLOAT, Preview::Depth),
-        Kept::new("gbuffer.normal_geo", vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
-        Kept::new("gbuffer.ids", vk::Format::R32G32_UINT, Preview::Ids),
+        Kept::new(gbuffer::DEPTH, vk::Format::R32G32_SFLOAT, Preview::Depth),
+        Kept::new(gbuffer::NORMAL_GEO, vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
+        Kept::new(gbuffer::IDS, vk::Format::R32G32_UINT, Preview::Ids),
     ]
 }
 
@@ -56,12 +57,12 @@ impl Pass for HistoryPass {
         PassDesc {
             name: NAME.into(),
             kind: PassKind::Transfer,
-            inputs: self.kept.iter().map(|k| k.source.clone()).collect(),
+            inputs: self.kept.iter().map(|k| k.source.into()).collect(),
             outputs: self
                 .kept
                 .iter()
                 .map(|k| OutputDesc {
-                    name: of(&k.source),
+                    name: of(k.source),
                     format: k.format,
                     usage: Usage::Transfer,
                     preview: k.preview,
@@ -73,7 +74,7 @@ impl Pass for HistoryPass {
 
     fn record(&mut self, ctx: &PassContext) -> Result<()> {
         for k in &self.kept {
-            ctx.rec.copy_image(ctx.images.get(&k.source), ctx.images.get(&of(&k.source)));
+            ctx.rec.copy_image(ctx.images.get(k.source), ctx.images.get(of(k.source)));
         }
         Ok(())
     }

@@ -3,7 +3,7 @@
 //! checkerboard, noise with a known mean).
 
 use crate::gpu::{Buffer, Context, MemoryLocation, vk};
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Usage};
+use crate::graph::{Output, OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Usage};
 use anyhow::{Result, bail};
 use std::sync::{Arc, Mutex};
 
@@ -13,13 +13,14 @@ pub const NAME: &str = "inject";
 pub type Texels = Arc<Mutex<Vec<[f32; 4]>>>;
 
 pub struct InjectPass {
-    output: String,
+    output: Output,
     staging: Buffer,
     texels: Texels,
 }
 
-/// An injected RGBA32F image named `inject.<output>`, `extent` texels.
-pub fn new(ctx: &Arc<Context>, output: &str, extent: vk::Extent2D) -> Result<(InjectPass, Texels)> {
+/// An injected RGBA32F image, `extent` texels, named `output` (declared by the caller with
+/// [`NAME`] as its pass: `Output::new(inject::NAME, "signal")`).
+pub fn new(ctx: &Arc<Context>, output: Output, extent: vk::Extent2D) -> Result<(InjectPass, Texels)> {
     let n = (extent.width * extent.height) as usize;
     let staging = Buffer::new(
         ctx,
@@ -29,7 +30,7 @@ pub fn new(ctx: &Arc<Context>, output: &str, extent: vk::Extent2D) -> Result<(In
         MemoryLocation::CpuToGpu,
     )?;
     let texels: Texels = Arc::new(Mutex::new(vec![[0.0; 4]; n]));
-    Ok((InjectPass { output: format!("{NAME}.{output}"), staging, texels: texels.clone() }, texels))
+    Ok((InjectPass { output, staging, texels: texels.clone() }, texels))
 }
 
 impl Pass for InjectPass {
@@ -39,7 +40,7 @@ impl Pass for InjectPass {
             kind: PassKind::Transfer,
             inputs: Vec::new(),
             outputs: vec![OutputDesc {
-                name: self.output.clone(),
+                name: self.output.into(),
                 format: vk::Format::R32G32B32A32_SFLOAT,
                 usage: Usage::Transfer,
                 preview: Preview::Color,
@@ -55,7 +56,7 @@ impl Pass for InjectPass {
         }
         // Written while recording, before the frame's submission: the host write is visible.
         self.staging.write(0, bytemuck::cast_slice(&texels))?;
-        ctx.rec.copy_buffer_to_image(&self.staging, ctx.images.get(&self.output));
+        ctx.rec.copy_buffer_to_image(&self.staging, ctx.images.get(self.output));
         Ok(())
     }
 }

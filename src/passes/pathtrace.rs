@@ -6,20 +6,23 @@
 use super::PassBuilder;
 use super::fullscreen::FullscreenPass;
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, Preview};
+use crate::graph::{Output, OutputDesc, Pass, PassContext, PassDesc, Preview, Resource, ShaderInterface};
 use anyhow::Result;
 
 pub const NAME: &str = "pathtrace";
-pub const ACCUM: &str = "pathtrace.accum";
-pub const COLOR: &str = "pathtrace.color";
-pub const RAYS: &str = "pathtrace.rays";
+/// The running sum of samples (alpha = samples).
+pub const ACCUM: Output = Output::new(NAME, "accum");
+/// The mean of the samples so far.
+pub const COLOR: Output = Output::new(NAME, "color");
+/// Rays each pixel has traced.
+pub const RAYS: Output = Output::new(NAME, "rays");
 
-/// The shader's push constants.
+/// pathtrace.comp's push-constant block.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    seed: u32,
-    max_bounces: u32,
+pub struct Params {
+    pub seed: u32,
+    pub max_bounces: u32,
 }
 
 pub struct PathtracePass {
@@ -28,12 +31,12 @@ pub struct PathtracePass {
 
 pub fn new(b: &PassBuilder, seed: u32, max_bounces: u32) -> Result<PathtracePass> {
     let outputs = vec![
-        OutputDesc::storage(NAME, "accum", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(NAME, "color", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(NAME, "rays", vk::Format::R32_UINT, Preview::Scalar),
+        OutputDesc::storage(ACCUM, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(RAYS, vk::Format::R32_UINT, Preview::Scalar),
     ];
-    let push = bytemuck::bytes_of(&Params { seed, max_bounces }).to_vec();
-    let inner = FullscreenPass::new(b, NAME, &b.traced_shader("pathtrace.comp"), Vec::new(), outputs, push)?;
+    let push = Params { seed, max_bounces };
+    let inner = FullscreenPass::new(b, NAME, &b.traced_shader("pathtrace.comp"), Vec::new(), outputs, &push)?;
     Ok(PathtracePass { inner })
 }
 
@@ -42,11 +45,15 @@ impl Pass for PathtracePass {
         // The running sums are read back each frame before they are added to: declaring them as
         // inputs too makes the graph order last frame's writes before this frame's reads.
         let mut desc = self.inner.desc();
-        desc.inputs.extend([ACCUM.to_string(), RAYS.to_string()]);
+        desc.inputs.extend([ACCUM, RAYS].map(Resource::from));
         desc
     }
 
     fn record(&mut self, ctx: &PassContext) -> Result<()> {
         self.inner.record(ctx)
+    }
+
+    fn shader_interface(&self) -> Option<ShaderInterface> {
+        self.inner.shader_interface()
     }
 }

@@ -5,22 +5,22 @@
 use super::PassBuilder;
 use super::fullscreen::FullscreenPass;
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview};
 use anyhow::Result;
 
 pub const NAME: &str = "primary_rays";
 /// x = instance (0xffffffff on a miss), y = primitive, z = f32 bits of t, w = front face.
-pub const HIT: &str = "primary_rays.hit";
+pub const HIT: Output = Output::new(NAME, "hit");
 /// View depth of the hit, as gbuffer.depth.
-pub const DEPTH: &str = "primary_rays.depth";
+pub const DEPTH: Output = Output::new(NAME, "depth");
 /// Barycentrics (u, v) of vertices 1 and 2.
-pub const BARY: &str = "primary_rays.bary";
+pub const BARY: Output = Output::new(NAME, "bary");
 
 pub fn new(b: &PassBuilder) -> Result<FullscreenPass> {
     let outputs = vec![
-        OutputDesc::storage(NAME, "hit", vk::Format::R32G32B32A32_UINT, Preview::Ids),
-        OutputDesc::storage(NAME, "depth", vk::Format::R32_SFLOAT, Preview::Depth),
-        OutputDesc::storage(NAME, "bary", vk::Format::R32G32_SFLOAT, Preview::Color),
+        OutputDesc::storage(HIT, vk::Format::R32G32B32A32_UINT, Preview::Ids),
+        OutputDesc::storage(DEPTH, vk::Format::R32_SFLOAT, Preview::Depth),
+        OutputDesc::storage(BARY, vk::Format::R32G32_SFLOAT, Preview::Color),
     ];
-    FullscreenPass::new(b, NAME, &b.traced_shader("primary_rays.comp"), Vec::new(), outputs, Vec::new())
+    FullscreenPass::new(b, NAME, &b.traced_shader("primary_rays.comp"), Vec::new(), outputs, &())
 }

@@ -3,14 +3,27 @@
 //! (shaders-glsl/reflections.comp).
 
 use super::PassBuilder;
-use super::fullscreen::{FullscreenPass, Read};
+use super::fullscreen::{FullscreenPass, Input};
+use super::gbuffer;
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
 
 pub const NAME: &str = "reflections";
 /// The specular lobe's contribution (Fresnel and shadowing included).
-pub const RADIANCE: &str = "reflections.radiance";
+pub const RADIANCE: Output = Output::new(NAME, "radiance");
+/// Distance to the reflected hit.
+pub const HIT_DISTANCE: Output = Output::new(NAME, "hit_distance");
+
+/// reflections.comp's push-constant block.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct Params {
+    pub rays: u32,
+    pub roughness_cutoff: f32,
+    pub seed: u32,
+}
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct ReflectionSettings {
@@ -26,26 +39,18 @@ impl Default for ReflectionSettings {
     }
 }
 
-/// `rough_specular`: gi's estimate of the lobe (gi.specular), passed on above the cut-off.
-pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: &str) -> Result<FullscreenPass> {
-    let inputs = [
-        "gbuffer.depth",
-        "gbuffer.normal",
-        "gbuffer.normal_geo",
-        "gbuffer.base_color",
-        "gbuffer.metal_rough",
-        "gbuffer.ids",
-        rough_specular,
-    ]
-    .map(|n| (n.to_string(), Read::Texel))
-    .to_vec();
+/// `rough_specular`: gi's estimate of the lobe (gi.specular, or zero), passed on above the
+/// cut-off (bound as `in_specular`).
+pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: Resource) -> Result<FullscreenPass> {
+    let mut inputs: Vec<Input> =
+        [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::NORMAL_GEO, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::IDS]
+            .map(Input::texel)
+            .to_vec();
+    inputs.push(Input::texel(rough_specular).bound_as("in_specular"));
     let outputs = vec![
-        OutputDesc::storage(NAME, "radiance", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(NAME, "hit_distance", vk::Format::R32_SFLOAT, Preview::Depth),
+        OutputDesc::storage(RADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(HIT_DISTANCE, vk::Format::R32_SFLOAT, Preview::Depth),
     ];
-    let mut push = Vec::new();
-    push.extend_from_slice(&s.rays.max(1).to_le_bytes());
-    push.extend_from_slice(&s.roughness_cutoff.to_le_bytes());
-    push.extend_from_slice(&seed.to_le_bytes());
-    FullscreenPass::new(b, NAME, &b.traced_shader("reflections.comp"), inputs, outputs, push)
+    let push = Params { rays: s.rays.max(1), roughness_cutoff: s.roughness_cutoff, seed };
+    FullscreenPass::new(b, NAME, &b.traced_shader("reflections.comp"), inputs, outputs, &push)
 }

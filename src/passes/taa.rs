@@ -3,34 +3,44 @@
 //! moves, history rejected on disocclusion (motion mismatch).
 
 use super::PassBuilder;
-use super::fullscreen::{FullscreenPass, Read};
+use super::fullscreen::{FullscreenPass, Input};
+use super::gbuffer;
 use super::history::{self, Kept};
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
 
 pub const NAME: &str = "taa";
-pub const COLOR: &str = "taa.color";
+pub const COLOR: Output = Output::new(NAME, "color");
 /// Weight of the new frame in the blend where the image holds still (taa.comp raises it with
 /// the motion).
 pub const BLEND: f32 = 0.1;
 
-pub fn new(b: &PassBuilder, input: &str) -> Result<FullscreenPass> {
+/// taa.comp's push-constant block (`TaaParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct Params {
+    pub blend: f32,
+}
+
+/// `input` is the HDR image to resolve (bound as `in_color`).
+pub fn new(b: &PassBuilder, input: Resource) -> Result<FullscreenPass> {
     let inputs = vec![
-        (input.to_string(), Read::Texel),
-        ("gbuffer.motion".into(), Read::Texel),
-        (history::of("gbuffer.motion"), Read::Texel),
-        (history::of(COLOR), Read::Filtered),
+        Input::texel(input).bound_as("in_color"),
+        Input::texel(gbuffer::MOTION),
+        Input::texel(history::of(gbuffer::MOTION)),
+        Input::filtered(history::of(COLOR)),
     ];
-    let outputs = vec![OutputDesc::storage(NAME, "color", vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
-    FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, BLEND.to_le_bytes().to_vec())
+    let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, &Params { blend: BLEND })
 }
 
 /// What TAA needs from the previous frame: its result and the motion of what it showed.
 pub fn kept() -> Vec<Kept> {
     vec![
         Kept::new(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        Kept::new("gbuffer.motion", vk::Format::R32G32_SFLOAT, Preview::Motion),
+        Kept::new(gbuffer::MOTION, vk::Format::R32G32_SFLOAT, Preview::Motion),
     ]
 }
 

@@ -2,16 +2,16 @@
 //! (shaders-glsl/tonemap.comp). Its output is what PNG files and the window show.
 
 use super::PassBuilder;
-use super::fullscreen::{FullscreenPass, Read};
+use super::fullscreen::{FullscreenPass, Input};
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
 
 pub const NAME: &str = "tonemap";
-pub const COLOR: &str = "tonemap.color";
+pub const COLOR: Output = Output::new(NAME, "color");
 
-/// `input` is the HDR image to display.
-pub fn new(b: &PassBuilder, input: &str) -> Result<FullscreenPass> {
-    let outputs = vec![OutputDesc::storage(NAME, "color", vk::Format::R8G8B8A8_UNORM, Preview::Display)];
-    FullscreenPass::new(b, NAME, "tonemap.comp", vec![(input.to_string(), Read::Texel)], outputs, Vec::new())
+/// `input` is the HDR image to display (bound as `in_color`).
+pub fn new(b: &PassBuilder, input: Resource) -> Result<FullscreenPass> {
+    let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R8G8B8A8_UNORM, Preview::Display)];
+    FullscreenPass::new(b, NAME, "tonemap.comp", vec![Input::texel(input).bound_as("in_color")], outputs, &())
 }

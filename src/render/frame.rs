@@ -1,4 +1,4 @@
-//! The hybrid frame's plan: which passes run, in which order, wired by name.
+//! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
 //! gbuffer -> [primary_rays] -> shadows chain -> gi -> reflections -> [svgf chains: diffuse on
 //! gi, specular on reflections] -> composite -> [taa] -> tonemap -> history.
@@ -6,20 +6,22 @@
 
 use super::Settings;
 use super::plan::FramePlan;
-use crate::graph::Pass;
+use crate::graph::{Output, Pass, Resource};
 use crate::passes::{self, PassBuilder, history, inject, svgf};
 use anyhow::Result;
 use std::collections::HashMap;
 
-/// The name of the test signal injected when `Settings::test_signal` is on.
+/// The name of the test signal's SVGF chain when `Settings::test_signal` is on.
 pub const TEST_SIGNAL: &str = "signal";
+/// The test signal the CPU injects (see `Renderer::inject`).
+pub const TEST_INPUT: Output = Output::new(inject::NAME, TEST_SIGNAL);
 
 pub struct HybridFrame {
     pub passes: Vec<Box<dyn Pass>>,
-    /// Images the CPU provides (by output name), for tests.
-    pub injected: HashMap<String, inject::Texels>,
+    /// Images the CPU provides, for tests.
+    pub injected: HashMap<Output, inject::Texels>,
     /// The linear HDR result.
-    pub hdr_output: String,
+    pub hdr_output: Output,
 }
 
 pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<HybridFrame> {
@@ -37,45 +39,44 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     // (smooth metals only), both are zero.
     let (gi_diffuse, gi_specular) = if plan.gi {
         passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed, settings.reflections.roughness_cutoff)?));
-        (passes::gi::RADIANCE.to_string(), passes::gi::SPECULAR.to_string())
+        (passes::gi::RADIANCE.into(), passes::gi::SPECULAR.into())
     } else {
         let zero = crate::graph::zero(crate::gpu::vk::Format::R32G32B32A32_SFLOAT, false);
-        (zero.clone(), zero)
+        (zero, zero)
     };
     // Without glossy surfaces, no reflection rays: gi's estimate of the rough lobes is the
     // specular signal.
-    let mut specular = if plan.reflections {
-        passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed, &gi_specular)?));
-        passes::reflections::RADIANCE.to_string()
+    let mut specular: Resource = if plan.reflections {
+        passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed, gi_specular)?));
+        passes::reflections::RADIANCE.into()
     } else {
         gi_specular
     };
     let mut diffuse = gi_diffuse;
     if settings.denoiser {
         for (signal, input) in [("diffuse", &mut diffuse), ("specular", &mut specular)] {
-            let chain = svgf::chain(b, signal, input, &settings.denoise)?;
+            let chain = svgf::chain(b, signal, *input, &settings.denoise)?;
             passes.extend(chain.passes);
             kept.extend(chain.kept);
-            *input = chain.output;
+            *input = chain.output.into();
         }
     }
     if settings.test_signal {
-        let (pass, texels) = inject::new(b.ctx, TEST_SIGNAL, extent)?;
-        let name = format!("{}.{TEST_SIGNAL}", inject::NAME);
+        let (pass, texels) = inject::new(b.ctx, TEST_INPUT, extent)?;
         passes.push(Box::new(pass));
-        let chain = svgf::chain(b, TEST_SIGNAL, &name, &settings.denoise)?;
+        let chain = svgf::chain(b, TEST_SIGNAL, TEST_INPUT.into(), &settings.denoise)?;
         passes.extend(chain.passes);
         kept.extend(chain.kept);
-        injected.insert(name, texels);
+        injected.insert(TEST_INPUT, texels);
     }
-    passes.push(Box::new(passes::composite::new(b, shadows.visibility, &diffuse, &specular)?));
-    let mut hdr_output = passes::composite::COLOR.to_string();
+    passes.push(Box::new(passes::composite::new(b, shadows.visibility.into(), diffuse, specular)?));
+    let mut hdr_output = passes::composite::COLOR;
     if settings.taa {
-        passes.push(Box::new(passes::taa::new(b, &hdr_output)?));
+        passes.push(Box::new(passes::taa::new(b, hdr_output.into())?));
         kept.extend(passes::taa::kept());
-        hdr_output = passes::taa::COLOR.to_string();
+        hdr_output = passes::taa::COLOR;
     }
-    passes.push(Box::new(passes::tonemap::new(b, &hdr_output)?));
+    passes.push(Box::new(passes::tonemap::new(b, hdr_output.into())?));
     passes.push(Box::new(history::new(kept)));
     Ok(HybridFrame { passes, injected, hdr_output })
 }

@@ -20,7 +20,7 @@ pub use scene_gpu::{FrameUniforms, SceneGpu};
 
 use crate::backend::Backend;
 use crate::gpu::{CommandPool, Context, Recorder, ShaderLibrary, vk};
-use crate::graph::{Graph, Pass, PassTime};
+use crate::graph::{Graph, Output, Pass, PassTime, Resource};
 use crate::image_io::CpuImage;
 use crate::passes::{self, PassBuilder};
 use crate::scene::{Pose, Scene};
@@ -107,7 +107,7 @@ impl Default for Settings {
 }
 
 /// The 8-bit, display-encoded image of a frame.
-pub const DISPLAY_OUTPUT: &str = passes::tonemap::COLOR;
+pub const DISPLAY_OUTPUT: Output = passes::tonemap::COLOR;
 
 pub struct Renderer {
     /// What the frame leaves out for this scene, and why.
@@ -137,8 +137,8 @@ pub struct Renderer {
     /// The ray-list tracer, made on first use.
     ray_batch: Option<ray_batch::RayBatch>,
     /// Images the CPU feeds into the frame (tests), by output name.
-    injected: std::collections::HashMap<String, passes::inject::Texels>,
-    hdr_output: String,
+    injected: std::collections::HashMap<Output, passes::inject::Texels>,
+    hdr_output: Output,
     /// The next frame starts all temporal histories anew.
     cut_pending: bool,
     /// A camera set from outside (the viewer), in place of the scene's.
@@ -161,7 +161,7 @@ pub struct ViewOverride {
 }
 
 /// The passes of a frame for `settings`, the images the CPU feeds into it and its HDR output.
-type FrameParts = (Vec<Box<dyn Pass>>, std::collections::HashMap<String, passes::inject::Texels>, String);
+type FrameParts = (Vec<Box<dyn Pass>>, std::collections::HashMap<Output, passes::inject::Texels>, Output);
 
 fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> Result<FrameParts> {
     Ok(match settings.mode {
@@ -172,10 +172,10 @@ fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> 
         RenderMode::Reference { seed, max_bounces } => (
             vec![
                 Box::new(passes::pathtrace::new(b, seed, max_bounces)?),
-                Box::new(passes::tonemap::new(b, passes::pathtrace::COLOR)?),
+                Box::new(passes::tonemap::new(b, passes::pathtrace::COLOR.into())?),
             ],
             Default::default(),
-            passes::pathtrace::COLOR.to_string(),
+            passes::pathtrace::COLOR,
         ),
     })
 }
@@ -244,7 +244,7 @@ impl Renderer {
 
     /// The name of the shadow visibility the lighting reads this frame: the filtered one when
     /// the plan keeps soft shadows, the hard-shadow trace's otherwise.
-    pub fn shadow_visibility(&self) -> &'static str {
+    pub fn shadow_visibility(&self) -> Output {
         if self.plan.soft_shadows { passes::shadows::VISIBILITY } else { passes::shadows::HARD_VISIBILITY }
     }
 
@@ -305,8 +305,8 @@ impl Renderer {
     }
 
     /// The linear HDR image of the frame (before tonemapping).
-    pub fn hdr_output(&self) -> &str {
-        &self.hdr_output
+    pub fn hdr_output(&self) -> Output {
+        self.hdr_output
     }
 
     /// The next frame is a camera cut: temporal passes drop their history.
@@ -315,8 +315,8 @@ impl Renderer {
     }
 
     /// The RGBA texels an injected image (`inject.NAME`) will show from the next frame on.
-    pub fn inject(&self, name: &str, texels: Vec<[f32; 4]>) -> Result<()> {
-        let slot = self.injected.get(name).ok_or_else(|| anyhow::anyhow!("no injected image named {name}"))?;
+    pub fn inject(&self, name: Output, texels: Vec<[f32; 4]>) -> Result<()> {
+        let slot = self.injected.get(&name).ok_or_else(|| anyhow::anyhow!("no injected image named {name}"))?;
         *slot.lock().map_err(|_| anyhow::anyhow!("injected image poisoned"))? = texels;
         Ok(())
     }
@@ -401,27 +401,28 @@ impl Renderer {
         }
     }
 
-    /// Reads named outputs of the last frame back to the CPU.
-    pub fn read_outputs(&mut self, names: &[&str]) -> Result<Vec<CpuImage>> {
-        for n in names {
-            if self.graph.image(n).is_none() {
+    /// Reads outputs of the last frame back to the CPU.
+    pub fn read_outputs<R: Into<Resource> + Copy>(&mut self, names: &[R]) -> Result<Vec<CpuImage>> {
+        let names: Vec<Resource> = names.iter().map(|n| (*n).into()).collect();
+        for n in &names {
+            if self.graph.image(*n).is_none() {
                 bail!("no pass output named {n}");
             }
         }
         let (graph, ctx) = (&mut self.graph, &self.ctx);
         let buffers = self.pool.run(|cmd| {
             let rec = Recorder::new(ctx, cmd);
-            graph.prepare_readback(&rec, names);
+            graph.prepare_readback(&rec, &names);
             names
                 .iter()
-                .map(|n| crate::graph::copy_to_host(ctx, &rec, graph.image(n).expect("checked above")))
+                .map(|n| crate::graph::copy_to_host(ctx, &rec, graph.image(*n).expect("checked above")))
                 .collect::<Result<Vec<_>>>()
         })?;
         names
             .iter()
             .zip(buffers)
             .map(|(n, buf)| {
-                let img = self.graph.image(n).expect("checked above");
+                let img = self.graph.image(*n).expect("checked above");
                 let bytes = buf.mapped().ok_or_else(|| anyhow::anyhow!("read-back buffer is not mapped"))?;
                 CpuImage::from_raw(img.format, img.extent.width, img.extent.height, bytes)
             })
@@ -443,7 +444,8 @@ impl Renderer {
         batch.trace(&self.ctx, &self.pool, &mut self.scene_gpu, rays, any_hit, repeats)
     }
 
-    pub fn read_output(&mut self, name: &str) -> Result<CpuImage> {
+    pub fn read_output(&mut self, name: impl Into<Resource>) -> Result<CpuImage> {
+        let name: Resource = name.into();
         Ok(self.read_outputs(&[name])?.remove(0))
     }
 }

@@ -310,8 +310,7 @@ fn run_config(
             v.push(t.gpu_ms);
         }
     }
-    let out = r.hdr_output().to_string();
-    let last_frame = r.read_output(&out)?;
+    let last_frame = r.read_output(r.hdr_output())?;
     Ok(Run { totals, stamps, per_pass, last_frame })
 }
 

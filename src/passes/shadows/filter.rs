@@ -1,37 +1,37 @@
 //! shadows_filter: temporal mean and dv-scaled cross-bilateral filter of the visibility, the
 //! penumbra measure dv_bar, the filter width, and the budget sum (shaders-glsl/shadows_filter.comp).
 
-use super::RING;
+use super::{Params, RING, penumbra, tent, trace};
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
-use crate::passes::fullscreen::{FullscreenPass, Read};
+use crate::passes::fullscreen::{FullscreenPass, Input};
+use crate::passes::gbuffer;
 use anyhow::Result;
 
 pub const NAME: &str = "shadows_filter";
+/// The filtered visibility, one channel per light.
+pub const VISIBILITY: Output = Output::new(NAME, "visibility");
+/// dv_bar per light.
+pub const DV: Output = Output::new(NAME, "dv");
+/// Filter width per light (1..9).
+pub const KERNEL: Output = Output::new(NAME, "kernel");
+/// Sum of dv_bar x 64 over the image (texel 0,0).
+pub const BUDGET: Output = Output::new(NAME, "budget");
 
-pub fn new(b: &PassBuilder, push: Vec<u8>) -> Result<FullscreenPass> {
-    let inputs = [
-        "shadows.ring0",
-        "shadows.ring1",
-        "shadows.ring2",
-        "shadows.ring3",
-        "shadows_penumbra.dv_raw",
-        "shadows_tent_v.dv",
-        "gbuffer.depth",
-        "gbuffer.normal_geo",
-        "gbuffer.ids",
-    ]
-    .map(|n| (n.to_string(), Read::Texel))
-    .to_vec();
+pub fn new(b: &PassBuilder, push: &Params) -> Result<FullscreenPass> {
+    let mut inputs: Vec<Input> =
+        [trace::RING0, trace::RING1, trace::RING2, trace::RING3, penumbra::DV_RAW].map(Input::texel).to_vec();
+    inputs.push(Input::texel(tent::DV_V));
+    inputs.extend([gbuffer::DEPTH, gbuffer::NORMAL_GEO, gbuffer::IDS].map(Input::texel));
     let outputs = vec![
-        OutputDesc::storage(NAME, "visibility", RING, Preview::Color),
-        OutputDesc::storage(NAME, "dv", RING, Preview::Scalar),
-        OutputDesc::storage(NAME, "kernel", RING, Preview::Scalar),
-        OutputDesc::storage(NAME, "budget", vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
+        OutputDesc::storage(VISIBILITY, RING, Preview::Color),
+        OutputDesc::storage(DV, RING, Preview::Scalar),
+        OutputDesc::storage(KERNEL, RING, Preview::Scalar),
+        OutputDesc::storage(BUDGET, vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
     ];
     let mut pass = FullscreenPass::new(b, NAME, "shadows_filter.comp", inputs, outputs, push)?;
     // The budget is a sum over this frame's pixels: start it at zero.
-    pass.clear_before_dispatch(&format!("{NAME}.budget"));
+    pass.clear_before_dispatch(BUDGET);
     Ok(pass)
 }

@@ -9,23 +9,23 @@
 //! sample counts 1..s_max, filtering, history. Lights without one are hard: one ray, no filter.
 //! The final visibility is `shadows_filter.visibility`, one channel per light.
 
-mod filter;
-mod penumbra;
-mod tent;
-mod trace;
+pub mod filter;
+pub mod penumbra;
+pub mod tent;
+pub mod trace;
 
 use super::PassBuilder;
 use super::history::Kept;
 use crate::gpu::vk;
-use crate::graph::{Pass, Preview};
+use crate::graph::{Output, Pass, Preview};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 /// The visibility the lighting reads when some light is soft: one channel per light (the first
 /// four). With punctual lights only, the chain is the trace pass alone and its `ring0` is read.
-pub const VISIBILITY: &str = "shadows_filter.visibility";
+pub const VISIBILITY: Output = filter::VISIBILITY;
 /// The visibility of a chain without soft lights (see [`Chain::visibility`]).
-pub const HARD_VISIBILITY: &str = "shadows.ring0";
+pub const HARD_VISIBILITY: Output = trace::RING0;
 /// Lights beyond this many are shaded without shadows.
 pub const MAX_SHADOWED_LIGHTS: usize = 4;
 
@@ -53,29 +53,29 @@ impl Default for ShadowSettings {
     }
 }
 
-/// The push-constant block of common/shadows_common.glsl.
+/// The push-constant block of common/shadows_common.glsl (`ShadowParams`), shared by the
+/// chain's passes.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct Params {
-    s_max: u32,
-    delta: f32,
-    eta: f32,
-    budget: f32,
-    forced_blocks: u32,
-    tent_axis: u32,
+pub struct Params {
+    pub s_max: u32,
+    pub delta: f32,
+    pub eta: f32,
+    pub budget: f32,
+    pub forced_blocks: u32,
+    pub tent_axis: u32,
 }
 
 impl ShadowSettings {
-    fn push_constants(&self, pixels: u32, tent_axis: u32) -> Vec<u8> {
-        bytemuck::bytes_of(&Params {
+    fn push_constants(&self, pixels: u32, tent_axis: u32) -> Params {
+        Params {
             s_max: self.s_max.max(1),
             delta: self.delta,
             eta: self.eta,
             budget: self.budget_fraction * pixels as f32,
             forced_blocks: self.forced_blocks as u32,
             tent_axis,
-        })
-        .to_vec()
+        }
     }
 }
 
@@ -86,8 +86,8 @@ pub struct Chain {
     pub passes: Vec<Box<dyn Pass>>,
     /// What the next frame needs from this one.
     pub kept: Vec<Kept>,
-    /// The name of the visibility the lighting reads.
-    pub visibility: &'static str,
+    /// The visibility the lighting reads.
+    pub visibility: Output,
 }
 
 /// The chain's passes. With `soft` false (every light punctual, the frame plan's call) only the
@@ -95,24 +95,24 @@ pub struct Chain {
 pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bool) -> Result<Chain> {
     let pixels = extent.width * extent.height;
     if !soft {
-        let trace = trace::new(b, s.push_constants(pixels, 0), false)?;
+        let trace = trace::new(b, &s.push_constants(pixels, 0), false)?;
         return Ok(Chain { passes: vec![Box::new(trace)], kept: Vec::new(), visibility: HARD_VISIBILITY });
     }
     let passes: Vec<Box<dyn Pass>> = vec![
-        Box::new(trace::new(b, s.push_constants(pixels, 0), true)?),
-        Box::new(penumbra::new(b, s.push_constants(pixels, 0))?),
-        Box::new(tent::new(b, 0, s.push_constants(pixels, 0))?),
-        Box::new(tent::new(b, 1, s.push_constants(pixels, 1))?),
-        Box::new(filter::new(b, s.push_constants(pixels, 0))?),
+        Box::new(trace::new(b, &s.push_constants(pixels, 0), true)?),
+        Box::new(penumbra::new(b, &s.push_constants(pixels, 0))?),
+        Box::new(tent::new(b, 0, &s.push_constants(pixels, 0))?),
+        Box::new(tent::new(b, 1, &s.push_constants(pixels, 1))?),
+        Box::new(filter::new(b, &s.push_constants(pixels, 0))?),
     ];
     let kept = vec![
-        Kept::new("shadows.ring0", RING, Preview::Color),
-        Kept::new("shadows.ring1", RING, Preview::Color),
-        Kept::new("shadows.ring2", RING, Preview::Color),
-        Kept::new("shadows.sample_count", RING, Preview::Scalar),
-        Kept::new("shadows.stable", RING, Preview::Scalar),
-        Kept::new("shadows_filter.dv", RING, Preview::Scalar),
-        Kept::new("shadows_filter.budget", vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
+        Kept::new(trace::RING0, RING, Preview::Color),
+        Kept::new(trace::RING1, RING, Preview::Color),
+        Kept::new(trace::RING2, RING, Preview::Color),
+        Kept::new(trace::SAMPLE_COUNT, RING, Preview::Scalar),
+        Kept::new(trace::STABLE, RING, Preview::Scalar),
+        Kept::new(filter::DV, RING, Preview::Scalar),
+        Kept::new(filter::BUDGET, vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
     ];
     Ok(Chain { passes, kept, visibility: VISIBILITY })
 }

@@ -1,21 +1,22 @@
 //! shadows_penumbra: the per-light variation dv over the cached frames and its 5x5 maximum
 //! (shaders-glsl/shadows_penumbra.comp).
 
-use super::RING;
-use crate::graph::{OutputDesc, Preview};
+use super::{Params, RING, trace};
+use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
-use crate::passes::fullscreen::{FullscreenPass, Read};
+use crate::passes::fullscreen::{FullscreenPass, Input};
+use crate::passes::gbuffer;
 use anyhow::Result;
 
 pub const NAME: &str = "shadows_penumbra";
+/// max - min of the visibility over the ring.
+pub const DV_RAW: Output = Output::new(NAME, "dv_raw");
+/// Its 5x5 maximum.
+pub const DV_MAX: Output = Output::new(NAME, "dv_max");
 
-pub fn new(b: &PassBuilder, push: Vec<u8>) -> Result<FullscreenPass> {
-    let inputs = ["shadows.ring0", "shadows.ring1", "shadows.ring2", "shadows.ring3", "gbuffer.ids"]
-        .map(|n| (n.to_string(), Read::Texel))
-        .to_vec();
-    let outputs = vec![
-        OutputDesc::storage(NAME, "dv_raw", RING, Preview::Scalar),
-        OutputDesc::storage(NAME, "dv_max", RING, Preview::Scalar),
-    ];
+pub fn new(b: &PassBuilder, push: &Params) -> Result<FullscreenPass> {
+    let inputs = [trace::RING0, trace::RING1, trace::RING2, trace::RING3, gbuffer::IDS].map(Input::texel).to_vec();
+    let outputs =
+        vec![OutputDesc::storage(DV_RAW, RING, Preview::Scalar), OutputDesc::storage(DV_MAX, RING, Preview::Scalar)];
     FullscreenPass::new(b, NAME, "shadows_penumbra.comp", inputs, outputs, push)
 }

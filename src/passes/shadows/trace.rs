@@ -1,45 +1,51 @@
 //! shadows: shadow rays with adaptive per-pixel counts and the 4-frame visibility ring
 //! (shaders-glsl/shadows.comp).
 
-use super::RING;
+use super::{Params, RING, filter};
 use crate::gpu::vk;
-use crate::graph::{self, OutputDesc, Preview};
+use crate::graph::{self, Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
-use crate::passes::fullscreen::{FullscreenPass, Read};
-use crate::passes::history;
+use crate::passes::fullscreen::{FullscreenPass, Input};
+use crate::passes::{gbuffer, history};
 use anyhow::Result;
 
 pub const NAME: &str = "shadows";
+/// Visibility of this frame (one channel per light); ring1..ring3 hold the three frames before.
+pub const RING0: Output = Output::new(NAME, "ring0");
+pub const RING1: Output = Output::new(NAME, "ring1");
+pub const RING2: Output = Output::new(NAME, "ring2");
+pub const RING3: Output = Output::new(NAME, "ring3");
+/// Shadow rays per pixel and light (0: culled).
+pub const SAMPLE_COUNT: Output = Output::new(NAME, "sample_count");
+/// Frames the sample count has not changed.
+pub const STABLE: Output = Output::new(NAME, "stable");
 
 /// `soft`: some light has a radius, so the pass reads its history (the ring, counts, the
 /// filter's statistics); otherwise every history input is a zero image nobody writes: hard
 /// lights use none of it.
-pub fn new(b: &PassBuilder, push: Vec<u8>, soft: bool) -> Result<FullscreenPass> {
-    let prev = |name: &str| if soft { history::of(name) } else { graph::zero(RING, false) };
-    let budget = if soft { history::of("shadows_filter.budget") } else { graph::zero(vk::Format::R32_UINT, true) };
-    let inputs = [
-        "gbuffer.depth".to_string(),
-        "gbuffer.normal_geo".into(),
-        "gbuffer.ids".into(),
-        "gbuffer.motion".into(),
-        history::of("gbuffer.depth"),
-        prev("shadows.ring0"),
-        prev("shadows.ring1"),
-        prev("shadows.ring2"),
-        prev("shadows.sample_count"),
-        prev("shadows.stable"),
-        prev("shadows_filter.dv"),
-        budget,
-    ]
-    .map(|n| (n, Read::Texel))
-    .to_vec();
-    let outputs = vec![
-        OutputDesc::storage(NAME, "ring0", RING, Preview::Color),
-        OutputDesc::storage(NAME, "ring1", RING, Preview::Color),
-        OutputDesc::storage(NAME, "ring2", RING, Preview::Color),
-        OutputDesc::storage(NAME, "ring3", RING, Preview::Color),
-        OutputDesc::storage(NAME, "sample_count", RING, Preview::Scalar),
-        OutputDesc::storage(NAME, "stable", RING, Preview::Scalar),
+pub fn new(b: &PassBuilder, push: &Params, soft: bool) -> Result<FullscreenPass> {
+    let prev = |output: Output, format: vk::Format, small: bool| {
+        let input = Input::texel(history::of(output));
+        if soft { input } else { input.reading(graph::zero(format, small)) }
+    };
+    let inputs = vec![
+        Input::texel(gbuffer::DEPTH),
+        Input::texel(gbuffer::NORMAL_GEO),
+        Input::texel(gbuffer::IDS),
+        Input::texel(gbuffer::MOTION),
+        Input::texel(history::of(gbuffer::DEPTH)),
+        prev(RING0, RING, false),
+        prev(RING1, RING, false),
+        prev(RING2, RING, false),
+        prev(SAMPLE_COUNT, RING, false),
+        prev(STABLE, RING, false),
+        prev(filter::DV, RING, false),
+        prev(filter::BUDGET, vk::Format::R32_UINT, true),
     ];
+    let outputs = [RING0, RING1, RING2, RING3]
+        .map(|o| OutputDesc::storage(o, RING, Preview::Color))
+        .into_iter()
+        .chain([SAMPLE_COUNT, STABLE].map(|o| OutputDesc::storage(o, RING, Preview::Scalar)))
+        .collect();
     FullscreenPass::new(b, NAME, &b.traced_shader("shadows.comp"), inputs, outputs, push)
 }

@@ -1,26 +1,38 @@
 //! svgf_atrous_<signal>_<i>: iteration i of the edge-avoiding a-trous filter, step 2^i
 //! (shaders-glsl/svgf_atrous.comp).
 
-use super::{Names, SvgfSettings};
+use super::{SvgfSettings, iteration, temporal, variance};
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
-use crate::passes::fullscreen::{FullscreenPass, Read};
+use crate::passes::fullscreen::{FullscreenPass, Input};
+use crate::passes::gbuffer;
 use anyhow::Result;
 
-pub fn new(b: &PassBuilder, names: &Names, i: u32, s: &SvgfSettings) -> Result<FullscreenPass> {
+pub const NAME: &str = "svgf_atrous";
+/// The filtered colour (of one run: `COLOR.of(svgf::iteration(signal, i))`).
+pub const COLOR: Output = Output::new(NAME, "color");
+/// The filtered variance.
+pub const VARIANCE: Output = Output::new(NAME, "variance");
+
+pub fn new(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -> Result<FullscreenPass> {
     let (color, variance) = if i == 0 {
-        (format!("{}.color", names.temporal), format!("{}.variance", names.variance))
+        (temporal::COLOR.of(super::signal(signal)), variance::VARIANCE.of(super::signal(signal)))
     } else {
-        (format!("{}.color", names.atrous(i - 1)), format!("{}.variance", names.atrous(i - 1)))
+        (COLOR.of(iteration(signal, i - 1)), VARIANCE.of(iteration(signal, i - 1)))
     };
-    let inputs = [color, variance, "gbuffer.depth".into(), "gbuffer.normal".into(), "gbuffer.ids".into()]
-        .map(|n| (n, Read::Texel))
-        .to_vec();
-    let name = names.atrous(i);
-    let outputs = vec![
-        OutputDesc::storage(&name, "color", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(&name, "variance", vk::Format::R32_SFLOAT, Preview::Scalar),
+    let inputs = vec![
+        Input::texel(color),
+        Input::texel(variance),
+        Input::texel(gbuffer::DEPTH),
+        Input::texel(gbuffer::NORMAL),
+        Input::texel(gbuffer::IDS),
     ];
-    FullscreenPass::new(b, &name, "svgf_atrous.comp", inputs, outputs, s.push_constants(1 << i))
+    let run = iteration(signal, i);
+    let outputs = vec![
+        OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(VARIANCE.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
+    ];
+    let push = s.push_constants(1 << i);
+    FullscreenPass::new(b, &COLOR.of(run).pass_name(), "svgf_atrous.comp", inputs, outputs, &push)
 }

@@ -7,14 +7,14 @@
 //! step by step. The first a-trous iteration's colour, and the temporal moments and history
 //! length, are kept for the next frame by the `history` pass.
 
-mod atrous;
-mod temporal;
-mod variance;
+pub mod atrous;
+pub mod temporal;
+pub mod variance;
 
 use super::PassBuilder;
-use super::history::{self, Kept};
+use super::history::Kept;
 use crate::gpu::vk;
-use crate::graph::{Pass, Preview};
+use crate::graph::{Instance, Output, Pass, Preview, Resource};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
@@ -57,23 +57,23 @@ impl Default for SvgfSettings {
     }
 }
 
-/// The push-constant block of common/svgf.glsl.
+/// The push-constant block of common/svgf.glsl (`SvgfParams`), shared by the three stages.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct Params {
-    alpha: f32,
-    moments_alpha: f32,
-    sigma_z: f32,
-    sigma_n: f32,
-    sigma_l: f32,
-    history_cap: f32,
-    clamp_sigma: f32,
-    step: i32,
+pub struct Params {
+    pub alpha: f32,
+    pub moments_alpha: f32,
+    pub sigma_z: f32,
+    pub sigma_n: f32,
+    pub sigma_l: f32,
+    pub history_cap: f32,
+    pub clamp_sigma: f32,
+    pub step: i32,
 }
 
 impl SvgfSettings {
-    fn push_constants(&self, step: i32) -> Vec<u8> {
-        bytemuck::bytes_of(&Params {
+    fn push_constants(&self, step: i32) -> Params {
+        Params {
             alpha: self.alpha,
             moments_alpha: self.moments_alpha,
             sigma_z: self.sigma_z,
@@ -82,57 +82,41 @@ impl SvgfSettings {
             history_cap: self.history_cap,
             clamp_sigma: self.clamp_sigma,
             step,
-        })
-        .to_vec()
+        }
     }
 }
 
-/// A built chain: its passes in order, the name of the filtered output, and what it keeps.
+/// A built chain: its passes in order, the filtered output, and what it keeps.
 pub struct Chain {
     pub passes: Vec<Box<dyn Pass>>,
-    pub output: String,
+    pub output: Output,
     pub kept: Vec<Kept>,
 }
 
-/// The names of one chain's outputs.
-pub struct Names {
-    pub temporal: String,
-    pub variance: String,
-    signal: String,
+/// The temporal and variance stages of the chain of `signal` (`svgf_temporal_diffuse`):
+/// `temporal::COLOR.of(svgf::signal("diffuse"))`.
+pub const fn signal(signal: &'static str) -> Instance {
+    Instance { signal: Some(signal), iteration: None }
 }
 
-impl Names {
-    pub fn new(signal: &str) -> Self {
-        Self {
-            temporal: format!("svgf_temporal_{signal}"),
-            variance: format!("svgf_variance_{signal}"),
-            signal: signal.into(),
-        }
-    }
-
-    pub fn atrous(&self, i: u32) -> String {
-        format!("svgf_atrous_{}_{i}", self.signal)
-    }
+/// A-trous iteration `i` of the chain of `signal` (`svgf_atrous_diffuse_0`).
+pub const fn iteration(signal: &'static str, i: u32) -> Instance {
+    Instance { signal: Some(signal), iteration: Some(i) }
 }
 
 /// The chain filtering `input` (a demodulated RGBA32F signal) under the name `signal`.
-pub fn chain(b: &PassBuilder, signal: &str, input: &str, s: &SvgfSettings) -> Result<Chain> {
-    let names = Names::new(signal);
+pub fn chain(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSettings) -> Result<Chain> {
     let iterations = s.iterations.max(1);
     let mut passes: Vec<Box<dyn Pass>> =
-        vec![Box::new(temporal::new(b, &names, input, s)?), Box::new(variance::new(b, &names, s)?)];
+        vec![Box::new(temporal::new(b, signal, input, s)?), Box::new(variance::new(b, signal, s)?)];
     for i in 0..iterations {
-        passes.push(Box::new(atrous::new(b, &names, i, s)?));
+        passes.push(Box::new(atrous::new(b, signal, i, s)?));
     }
+    let run = self::signal(signal);
     let kept = vec![
-        Kept::new(&format!("{}.color", names.atrous(0)), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        Kept::new(&format!("{}.moments", names.temporal), vk::Format::R32G32_SFLOAT, Preview::Scalar),
-        Kept::new(&format!("{}.history_length", names.temporal), vk::Format::R32_SFLOAT, Preview::Scalar),
+        Kept::new(atrous::COLOR.of(iteration(signal, 0)), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        Kept::new(temporal::MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
+        Kept::new(temporal::HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
     ];
-    Ok(Chain { passes, output: format!("{}.color", names.atrous(iterations - 1)), kept })
-}
-
-/// The previous frame's copy of an output (see `history`).
-fn prev(name: &str) -> String {
-    history::of(name)
+    Ok(Chain { passes, output: atrous::COLOR.of(iteration(signal, iterations - 1)), kept })
 }

@@ -1,36 +1,47 @@
 //! svgf_temporal_<signal>: reprojected temporal accumulation of colour and luminance moments
 //! with a history length (shaders-glsl/svgf_temporal.comp).
 
-use super::{Names, SvgfSettings, prev};
+use super::{SvgfSettings, atrous, iteration, signal};
 use crate::gpu::vk;
-use crate::graph::{OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Preview, Resource};
 use crate::passes::PassBuilder;
-use crate::passes::fullscreen::{FullscreenPass, Read};
+use crate::passes::fullscreen::{FullscreenPass, Input};
+use crate::passes::gbuffer;
+use crate::passes::history;
 use anyhow::Result;
 
-pub fn new(b: &PassBuilder, names: &Names, input: &str, s: &SvgfSettings) -> Result<FullscreenPass> {
-    let n = &names.temporal;
-    let inputs = [
-        input.to_string(),
-        "gbuffer.depth".into(),
-        "gbuffer.normal_geo".into(),
-        "gbuffer.ids".into(),
-        "gbuffer.motion".into(),
-        prev("gbuffer.depth"),
-        prev("gbuffer.normal_geo"),
-        prev("gbuffer.ids"),
-        prev(&format!("{}.color", names.atrous(0))),
-        prev(&format!("{n}.moments")),
-        prev(&format!("{n}.history_length")),
-    ]
-    .map(|i| (i, Read::Texel))
-    .to_vec();
-    let outputs = vec![
-        OutputDesc::storage(n, "color", vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(n, "moments", vk::Format::R32G32_SFLOAT, Preview::Scalar),
-        OutputDesc::storage(n, "history_length", vk::Format::R32_SFLOAT, Preview::Scalar),
-        // Non-finite input samples caught since the first frame (texel 0,0).
-        OutputDesc::storage(n, "rejected", vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
+pub const NAME: &str = "svgf_temporal";
+/// The accumulated colour (of one chain: `COLOR.of(svgf::signal(signal))`).
+pub const COLOR: Output = Output::new(NAME, "color");
+/// First and second moments of the luminance.
+pub const MOMENTS: Output = Output::new(NAME, "moments");
+/// Frames accumulated.
+pub const HISTORY_LENGTH: Output = Output::new(NAME, "history_length");
+/// Non-finite input samples caught since the first frame (texel 0,0).
+pub const REJECTED: Output = Output::new(NAME, "rejected");
+
+/// `input` is the signal to filter (bound as `in_signal`).
+pub fn new(b: &PassBuilder, signal_name: &'static str, input: Resource, s: &SvgfSettings) -> Result<FullscreenPass> {
+    let run = signal(signal_name);
+    let inputs = vec![
+        Input::texel(input).bound_as("in_signal"),
+        Input::texel(gbuffer::DEPTH),
+        Input::texel(gbuffer::NORMAL_GEO),
+        Input::texel(gbuffer::IDS),
+        Input::texel(gbuffer::MOTION),
+        Input::texel(history::of(gbuffer::DEPTH)),
+        Input::texel(history::of(gbuffer::NORMAL_GEO)),
+        Input::texel(history::of(gbuffer::IDS)),
+        Input::texel(history::of(atrous::COLOR.of(iteration(signal_name, 0)))),
+        Input::texel(history::of(MOMENTS.of(run))),
+        Input::texel(history::of(HISTORY_LENGTH.of(run))),
     ];
-    FullscreenPass::new(b, n, "svgf_temporal.comp", inputs, outputs, s.push_constants(0))
+    let outputs = vec![
+        OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
+        OutputDesc::storage(HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
+        OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
+    ];
+    let push = s.push_constants(0);
+    FullscreenPass::new(b, &COLOR.of(run).pass_name(), "svgf_temporal.comp", inputs, outputs, &push)
 }
