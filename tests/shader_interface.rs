@@ -22,7 +22,7 @@ fn every_pass_matches_its_shader() {
     let backend = common::auto_backend(&ctx);
     let base = Settings { width: 16, height: 16, full: true, ..Default::default() };
     let configs = [
-        Settings { primary_rays: true, test_signal: true, ..base.clone() },
+        Settings { primary_rays: true, test_signal: true, taa: true, ..base.clone() },
         Settings { mode: RenderMode::Reference { seed: 1, max_bounces: 2 }, ..base },
     ];
     let mut checked = Vec::new();
@@ -40,7 +40,8 @@ fn every_pass_matches_its_shader() {
         }
     }
     // The passes every frame has, so a graph that silently lost its interfaces fails too.
-    for shader in ["gi.comp:compute", "shadows.comp:rayquery", "svgf_atrous.comp", "taa.comp", "pathtrace.comp:compute"] {
+    for shader in ["gi.comp:compute", "shadows.comp:rayquery", "svgf_atrous.comp", "taa.comp", "pathtrace.comp:compute"]
+    {
         assert!(checked.iter().any(|k| k == shader), "{shader} was not checked; checked: {checked:?}");
     }
     common::assert_validation_clean(ctx);
@@ -208,7 +209,7 @@ mod spirv {
                 else {
                     continue;
                 };
-                let Some(Type::Pointer(_, mut ty)) = self.types.get(&pointer) else { continue };
+                let Some(&Type::Pointer(_, mut ty)) = self.types.get(&pointer) else { continue };
                 while let Some(Type::Array(element)) = self.types.get(&ty) {
                     ty = *element;
                 }

@@ -100,7 +100,7 @@ pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bo
     }
     let passes: Vec<Box<dyn Pass>> = vec![
         Box::new(trace::new(b, &s.push_constants(pixels, 0), true)?),
-        Box::new(penumbra::new(b, &s.push_constants(pixels, 0))?),
+        Box::new(penumbra::new(b)?),
         Box::new(tent::new(b, 0, &s.push_constants(pixels, 0))?),
         Box::new(tent::new(b, 1, &s.push_constants(pixels, 1))?),
         Box::new(filter::new(b, &s.push_constants(pixels, 0))?),

@@ -1,7 +1,7 @@
 //! shadows_penumbra: the per-light variation dv over the cached frames and its 5x5 maximum
 //! (shaders-glsl/shadows_penumbra.comp).
 
-use super::{Params, RING, trace};
+use super::{RING, trace};
 use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
@@ -14,9 +14,10 @@ pub const DV_RAW: Output = Output::new(NAME, "dv_raw");
 /// Its 5x5 maximum.
 pub const DV_MAX: Output = Output::new(NAME, "dv_max");
 
-pub fn new(b: &PassBuilder, push: &Params) -> Result<FullscreenPass> {
+/// No push constants: the shader includes shadows_common.glsl but reads none of its settings.
+pub fn new(b: &PassBuilder) -> Result<FullscreenPass> {
     let inputs = [trace::RING0, trace::RING1, trace::RING2, trace::RING3, gbuffer::IDS].map(Input::texel).to_vec();
     let outputs =
         vec![OutputDesc::storage(DV_RAW, RING, Preview::Scalar), OutputDesc::storage(DV_MAX, RING, Preview::Scalar)];
-    FullscreenPass::new(b, NAME, "shadows_penumbra.comp", inputs, outputs, push)
+    FullscreenPass::new(b, NAME, "shadows_penumbra.comp", inputs, outputs, &())
 }
