@@ -56,7 +56,7 @@ impl Input {
 
 /// The GLSL name of the binding of `resource`: `g_<output>` for the G-buffer's, `prev_<output>`
 /// for the previous frame's copy of one, `in_<output>` for any other pass's.
-pub fn binding_name(resource: Resource) -> String {
+fn binding_name(resource: Resource) -> String {
     match resource {
         Resource::Output(o) if o.pass == super::gbuffer::NAME => format!("g_{}", o.name),
         Resource::Output(o) => format!("in_{}", o.name),
