@@ -123,7 +123,8 @@ mod spirv {
         SampledImage,
         Array(u32),
         Struct(Vec<u32>),
-        Pointer(u32, u32),
+        /// A pointer's pointee type.
+        Pointer(u32),
         AccelerationStructure,
     }
 
@@ -180,7 +181,7 @@ mod spirv {
                         m.types.insert(w[0], Type::Struct(w[1..].to_vec()));
                     }
                     OP_TYPE_POINTER => {
-                        m.types.insert(w[0], Type::Pointer(w[1], w[2]));
+                        m.types.insert(w[0], Type::Pointer(w[2]));
                     }
                     OP_TYPE_ACCELERATION_STRUCTURE => {
                         m.types.insert(w[0], Type::AccelerationStructure);
@@ -209,7 +210,7 @@ mod spirv {
                 else {
                     continue;
                 };
-                let Some(&Type::Pointer(_, mut ty)) = self.types.get(&pointer) else { continue };
+                let Some(&Type::Pointer(mut ty)) = self.types.get(&pointer) else { continue };
                 while let Some(Type::Array(element)) = self.types.get(&ty) {
                     ty = *element;
                 }
@@ -234,7 +235,7 @@ mod spirv {
         /// Bytes of the push-constant block (0 without one): its last member's offset and size.
         pub fn push_constant_size(&self) -> Result<usize, String> {
             let Some(&(_, pointer, _)) = self.variables.iter().find(|v| v.2 == PUSH_CONSTANT) else { return Ok(0) };
-            let Some(Type::Pointer(_, block)) = self.types.get(&pointer) else { return Err("bad pointer".into()) };
+            let Some(Type::Pointer(block)) = self.types.get(&pointer) else { return Err("bad pointer".into()) };
             self.size_of(*block)
         }
 
