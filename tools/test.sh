@@ -2,7 +2,7 @@
 # Quick start, command 2 of 2: installs what is missing (tools/setup.sh), then runs the whole
 # test suite on the local Vulkan device (lavapipe on a machine without a GPU) with the Khronos
 # validation layer on, and checks that Cargo.toml's rust-version is the real minimum
-# (tools/check-msrv.sh). Extra arguments go to `cargo test`.
+# (tools/check-msrv.sh, over every feature). Extra arguments go to `cargo test`.
 #
 # The tests build with the `shader-compiler` feature (libshaderc from source: ~20 minutes on 2
 # cores the first time): they compile shaders-glsl/ at run time (hot reload, `--shader-dir`) and
