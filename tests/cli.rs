@@ -179,6 +179,10 @@ fn info_reports_the_backend_and_falls_back_without_ray_tracing() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "shader-compiler"),
+    ignore = "compiles GLSL at run time: needs --features shader-compiler (tools/test.sh)"
+)]
 fn runtime_shader_errors_name_file_and_line() {
     let dir = common::temp_dir("shaders");
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl");
@@ -221,6 +225,20 @@ fn runtime_shader_errors_name_file_and_line() {
     let msg = text(&bad);
     assert!(msg.contains("tonemap.comp:3:") && msg.contains("error"), "{msg}");
     assert!(!msg.contains("panicked"), "{msg}");
+}
+
+/// A build without the runtime compiler refuses `--shader-dir` with the way to get one, no
+/// panic. (tools/test.sh builds with the compiler, so only a plain `cargo test` runs this.)
+#[cfg(not(feature = "shader-compiler"))]
+#[test]
+fn without_the_shader_compiler_shader_dir_says_how_to_rebuild() {
+    let dir = common::temp_dir("no-compiler");
+    let glsl = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl");
+    let out = dir.join("a.png");
+    let r = hybrid_rt(&["render", "--out", out.to_str().unwrap(), "--shader-dir", glsl.to_str().unwrap()], &[]);
+    let msg = text(&r);
+    assert!(!r.status.success() && msg.contains("--features shader-compiler"), "{msg}");
+    assert!(!msg.contains("panicked") && !out.exists(), "{msg}");
 }
 
 fn copy_dir(from: &Path, to: &Path) {

@@ -139,6 +139,10 @@ fn out_of_device_memory_names_the_allocation_and_suggests_a_smaller_size() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "shader-compiler"),
+    ignore = "compiles GLSL at run time: needs --features shader-compiler (tools/test.sh)"
+)]
 fn a_shader_broken_at_hot_reload_keeps_the_old_module() {
     let dir = common::temp_dir("reload");
     let copy = dir.join("shaders-glsl");

@@ -159,6 +159,10 @@ fn scripted_window_matches_the_headless_render() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "shader-compiler"),
+    ignore = "compiles GLSL at run time: needs --features shader-compiler (tools/test.sh)"
+)]
 fn a_broken_shader_keeps_the_old_pipelines() {
     let Some(x) = Xvfb::start() else { return };
     let dir = common::temp_dir("viewer-reload");

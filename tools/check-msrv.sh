@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Checks that Cargo.toml's rust-version is the real minimum (tools/test.sh runs it, so CI does).
+# Checks that Cargo.toml's rust-version is the real minimum (tools/test.sh runs it, so CI does),
+# with every feature on (the shader compiler's code and dependencies count too).
 #
 # With one toolchain installed the minimum cannot be found by building with older ones, so
 # tools/msrv.py derives it: the edition, the rust-version of every dependency in Cargo.lock's
@@ -18,7 +19,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
 host=$(rustc -vV | sed -n 's/^host: //p')
-cargo metadata --locked --format-version 1 --filter-platform "$host" >"$tmp/metadata.json"
+cargo metadata --locked --all-features --format-version 1 --filter-platform "$host" >"$tmp/metadata.json"
 
 if ! cargo clippy --version >/dev/null 2>&1; then
   echo "[msrv] FAILED: clippy is not installed (rustup component add clippy)"
@@ -31,7 +32,7 @@ edition=$(python3 -c 'import json,sys; m=json.load(open(sys.argv[1])); print(nex
 floor=$(python3 -c 'import sys; sys.path.insert(0, "tools"); import msrv; print(msrv.show(msrv.EDITION_FLOOR[sys.argv[1]]))' "$edition")
 { grep -v '^\s*msrv' clippy.toml 2>/dev/null || true; echo "msrv = \"$floor\""; } >"$tmp/clippy.toml"
 echo "[msrv] cargo clippy --all-targets with msrv = $floor (edition $edition), incompatible_msrv only"
-CLIPPY_CONF_DIR="$tmp" cargo clippy --locked --all-targets --message-format=json \
+CLIPPY_CONF_DIR="$tmp" cargo clippy --locked --all-targets --all-features --message-format=json \
   -- -A clippy::all -W clippy::incompatible_msrv >"$tmp/clippy.json"
 
 python3 tools/msrv.py --metadata "$tmp/metadata.json" --clippy "$tmp/clippy.json" --root .

@@ -7,7 +7,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source tools/env.sh
 bash tools/setup.sh
-echo "[render-default] building (the first build compiles libshaderc, ~10 minutes on 2 cores)"
+# The default features: the shaders are the SPIR-V committed in shaders-spv/, so no shader
+# compiler is built (tools/test.sh builds one).
+echo "[render-default] building (the first build takes a few minutes)"
 cargo build --locked
 # The quick start owns out/default.png, so it replaces its own earlier result.
 "$CARGO_TARGET_DIR/debug/hybrid-rt" render --size 640x640 --frames 8 --out out/default.png --force "$@"

@@ -2,7 +2,11 @@
 # Quick start, command 2 of 2: installs what is missing (tools/setup.sh), then runs the whole
 # test suite on the local Vulkan device (lavapipe on a machine without a GPU) with the Khronos
 # validation layer on, and checks that Cargo.toml's rust-version is the real minimum
-# (tools/check-msrv.sh). Extra arguments go to `cargo test`.
+# (tools/check-msrv.sh, over every feature). Extra arguments go to `cargo test`.
+#
+# The tests build with the `shader-compiler` feature (libshaderc from source: ~20 minutes on 2
+# cores the first time): they compile shaders-glsl/ at run time (hot reload, `--shader-dir`) and
+# check that shaders-spv/, the SPIR-V a default build embeds, is exactly what it compiles to.
 #
 # Every test binary runs even when one fails (--no-fail-fast); the end of the output lists each
 # failing binary with its failing tests, and the last line totals all of them in the form of
@@ -14,9 +18,9 @@ bash tools/setup.sh
 python3 tools/test_summary.py --self-test
 
 log=$(mktemp /tmp/hybrid-rt-test.XXXXXX.log)
-echo "[test] cargo test --no-fail-fast (target folder: $CARGO_TARGET_DIR; log: $log)"
+echo "[test] cargo test --features shader-compiler --no-fail-fast (target folder: $CARGO_TARGET_DIR; log: $log)"
 set +e
-cargo test --locked --no-fail-fast "$@" 2>&1 | tee "$log"
+cargo test --locked --features shader-compiler --no-fail-fast "$@" 2>&1 | tee "$log"
 cargo_status=${PIPESTATUS[0]}
 echo "[test] tools/check-msrv.sh"
 bash tools/check-msrv.sh

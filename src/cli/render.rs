@@ -62,7 +62,8 @@ pub struct RenderArgs {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
-    /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones.
+    /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones
+    /// (needs a build with `--features shader-compiler`).
     #[arg(long)]
     shader_dir: Option<PathBuf>,
     /// Pick the most accurate configuration whose frame time is at most this many ms, from

@@ -2,8 +2,9 @@
 
 use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::app::{self, ViewOptions, script};
-use crate::render::{CameraChoice, Settings};
-use anyhow::{Result, bail};
+use crate::gpu::ShaderLibrary;
+use crate::render::{self, CameraChoice, Settings};
+use anyhow::{Context as _, Result, bail};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -38,11 +39,13 @@ pub struct ViewArgs {
     /// Start with the overlay hidden (toggle with H or F1).
     #[arg(long)]
     hide_ui: bool,
-    /// Compile shaders from this shaders-glsl folder at start-up, and hot-reload it.
+    /// Compile shaders from this shaders-glsl folder at start-up, and hot-reload it (needs a
+    /// build with `--features shader-compiler`).
     #[arg(long, conflicts_with = "watch_shaders")]
     shader_dir: Option<PathBuf>,
     /// Start with the embedded shaders and hot-reload this folder when it changes (default:
-    /// the source tree's shaders-glsl, when it exists, for interactive runs).
+    /// the source tree's shaders-glsl, when it exists, for interactive runs of a build with
+    /// `--features shader-compiler`).
     #[arg(long)]
     watch_shaders: Option<PathBuf>,
     /// No hot reload.
@@ -69,12 +72,14 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     let scene = a.scene.load()?;
     let default_watch = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl");
     // Scripts must be reproducible: they reload only when told to (`reload`), from a folder
-    // named on the command line.
+    // named on the command line. A build without the runtime compiler watches nothing unless
+    // asked, and then says how to get one before opening a window.
     let watch = if a.no_watch {
         None
     } else if let Some(dir) = a.shader_dir.clone().or_else(|| a.watch_shaders.clone()) {
+        ShaderLibrary::runtime_compiler().with_context(|| format!("{}: cannot compile shaders", dir.display()))?;
         Some(dir)
-    } else if script.is_none() && default_watch.is_dir() {
+    } else if script.is_none() && default_watch.is_dir() && ShaderLibrary::runtime_compiler().is_ok() {
         Some(default_watch)
     } else {
         None

@@ -35,6 +35,9 @@ mod present;
 mod recorder;
 mod sampler;
 pub mod shader;
+#[cfg(feature = "shader-compiler")]
+mod shader_compile;
+pub mod shader_sources;
 mod swapchain;
 mod timestamps;
 pub mod upload;

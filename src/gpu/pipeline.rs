@@ -18,8 +18,9 @@ pub struct Pipeline {
 fn shader_module(ctx: &Context, spirv: &[u32], name: &str) -> Result<vk::ShaderModule> {
     let info = vk::ShaderModuleCreateInfo::default().code(spirv);
     // SAFETY: `spirv` is a whole SPIR-V module as u32 words (the size ash passes is in bytes,
-    // a multiple of 4 by construction), compiled by shaderc at build time or start-up, which
-    // emits valid SPIR-V; the device is live.
+    // a multiple of 4 by construction), compiled by shaderc (committed in shaders-spv/, which
+    // tests/committed_spirv.rs checks byte for byte against shaderc's output, or at build time
+    // or start-up with the shader-compiler feature), which emits valid SPIR-V; the device is live.
     unsafe { ctx.device.create_shader_module(&info, None) }.with_context(|| format!("create shader module {name}"))
 }
 

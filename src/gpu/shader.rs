@@ -1,6 +1,6 @@
-//! Shader modules: SPIR-V compiled at build time and embedded, or compiled at run time from a
-//! shaders-glsl folder (the viewer's hot reload and `--shader-dir`), with the same conventions
-//! (see shader_compile.rs).
+//! Shader modules: the SPIR-V embedded at build time (from shaders-spv/, or compiled from
+//! shaders-glsl/ with the `shader-compiler` feature), or compiled at run time from a
+//! shaders-glsl folder (the viewer's hot reload and `--shader-dir`, which need that feature).
 
 use anyhow::{Result, anyhow};
 use std::collections::HashMap;
@@ -10,10 +10,21 @@ mod embedded {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }
 
-#[path = "shader_compile.rs"]
-mod compile;
+#[cfg(feature = "shader-compiler")]
+use super::shader_compile as compile;
+pub use super::shader_sources::RAY_VARIANTS;
 
-pub use compile::RAY_VARIANTS;
+/// The compiler and options the runtime compiler uses, for shaders-spv/manifest.txt.
+#[cfg(feature = "shader-compiler")]
+pub const COMPILER: (&str, &str) = (
+    concat!("shaderc-sys ", env!("HYBRID_RT_SHADERC_VERSION"), " (libshaderc built from its bundled sources)"),
+    compile::OPTIONS,
+);
+
+/// What a build without the runtime compiler says when asked to compile.
+pub const NO_COMPILER: &str = "this hybrid-rt was built without the runtime shader compiler \
+     (it runs the SPIR-V committed in shaders-spv/); rebuild it with \
+     `cargo build --features shader-compiler` to compile shaders-glsl at run time";
 
 /// Where SPIR-V comes from.
 pub struct ShaderLibrary {
@@ -28,7 +39,14 @@ impl ShaderLibrary {
         Self { overrides: HashMap::new(), source_dir: None }
     }
 
-    /// Compiles every module in `dir` now (errors name file and line) and uses those.
+    /// Ok when this build can compile GLSL at run time; else the error saying how to get a
+    /// build that can (checked up front by options that would compile later, like hot reload).
+    pub fn runtime_compiler() -> Result<()> {
+        if cfg!(feature = "shader-compiler") { Ok(()) } else { Err(anyhow!(NO_COMPILER)) }
+    }
+
+    /// Compiles every module in `dir` (relative or absolute) now and uses those. Errors name
+    /// file and line; without the `shader-compiler` feature, the error says how to rebuild.
     pub fn from_dir(dir: &Path) -> Result<Self> {
         let mut lib = Self { overrides: HashMap::new(), source_dir: Some(dir.to_path_buf()) };
         lib.recompile()?;
@@ -38,22 +56,8 @@ impl ShaderLibrary {
     /// Recompiles all modules from the source folder. On error the previous SPIR-V is kept
     /// and the error (with file and line) returned.
     pub fn recompile(&mut self) -> Result<()> {
-        let dir = self.source_dir.clone().ok_or_else(|| anyhow!("no shader source folder"))?;
-        let compiler = shaderc::Compiler::new().map_err(|e| anyhow!("shaderc: {e}"))?;
-        let mut fresh = HashMap::new();
-        let modules = compile::list_modules(&dir).map_err(|e| anyhow!("{}: {e}", dir.display()))?;
-        for module in modules {
-            let variants: Vec<(Option<&str>, Option<&str>)> = if compile::is_traced(&dir, &module) {
-                RAY_VARIANTS.iter().map(|(k, d)| (Some(*k), Some(*d))).collect()
-            } else {
-                vec![(None, None)]
-            };
-            for (variant, define) in variants {
-                let words = compile::compile(&compiler, &dir, &module, define).map_err(|e| anyhow!(e))?;
-                fresh.insert(compile::module_key(&module, variant), words);
-            }
-        }
-        self.overrides = fresh;
+        let dir = self.source_dir.as_deref().ok_or_else(|| anyhow!("no shader source folder"))?;
+        self.overrides = compile_dir(dir)?;
         Ok(())
     }
 
@@ -74,4 +78,24 @@ impl ShaderLibrary {
     pub fn embedded_keys() -> impl Iterator<Item = &'static str> {
         embedded::EMBEDDED.iter().map(|(k, _)| *k)
     }
+}
+
+/// Every module key in `dir` compiled to SPIR-V words.
+#[cfg(feature = "shader-compiler")]
+fn compile_dir(dir: &Path) -> Result<HashMap<String, Vec<u32>>> {
+    let compiler = shaderc::Compiler::new().map_err(|e| anyhow!("shaderc: {e}"))?;
+    let mut out = HashMap::new();
+    let modules = super::shader_sources::list_modules(dir).map_err(|e| anyhow!("{}: {e}", dir.display()))?;
+    for module in modules {
+        for (key, define) in super::shader_sources::variants(dir, &module) {
+            let words = compile::compile(&compiler, dir, &module, define).map_err(|e| anyhow!(e))?;
+            out.insert(key, words);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(not(feature = "shader-compiler"))]
+fn compile_dir(dir: &Path) -> Result<HashMap<String, Vec<u32>>> {
+    Err(anyhow!("{}: cannot compile: {NO_COMPILER}", dir.display()))
 }

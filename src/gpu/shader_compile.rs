@@ -1,108 +1,37 @@
-//! GLSL -> SPIR-V compilation with shaderc, shared by `build.rs` (which includes this file to
-//! embed every shader in the binary) and by the runtime compiler (hot reload). One
-//! implementation, so a shader that builds at compile time builds the same way at run time.
+//! GLSL -> SPIR-V compilation with shaderc (the `shader-compiler` feature), shared by
+//! `build.rs` (which includes this file to compile every shader) and by the runtime compiler
+//! (hot reload, `--shader-dir`, the test that checks shaders-spv/). One implementation, so a
+//! shader compiles the same way at build time and at run time. The conventions (which files
+//! are modules, which are traced) are in shader_sources.rs.
 //!
-//! Conventions:
-//! - every file directly in `shaders-glsl/` with a stage extension (.vert, .frag, .comp) is a
-//!   shader module; `common/` holds includes;
-//! - a module that includes `common/trace.glsl` (directly or through another include) is
-//!   compiled twice, once per ray backend, with `RT_RAY_QUERY` or `RT_COMPUTE_BVH` defined, and
-//!   keyed `name.comp:rayquery` / `name.comp:compute`; other modules are keyed by file name.
+//! Files are named to shaderc relative to the shaders-glsl folder (`gbuffer.vert`,
+//! `common/brdf.glsl`): the SPIR-V's debug info carries these names, so the same GLSL gives
+//! the same bytes wherever the checkout lives, which is what lets shaders-spv/ be committed.
 
-use std::path::{Path, PathBuf};
+use super::shader_sources::{Stage, relative_name, resolve_include, stage_of};
+use std::path::Path;
 
-/// Ray backends a traced shader is compiled for: (key suffix, preprocessor define).
-pub const RAY_VARIANTS: [(&str, &str); 2] = [("rayquery", "RT_RAY_QUERY"), ("compute", "RT_COMPUTE_BVH")];
-
-/// The include that marks a shader as ray-traced.
-const TRACE_INCLUDE: &str = "common/trace.glsl";
-
-pub fn shader_kind(path: &Path) -> Option<shaderc::ShaderKind> {
-    match path.extension()?.to_str()? {
-        "vert" => Some(shaderc::ShaderKind::Vertex),
-        "frag" => Some(shaderc::ShaderKind::Fragment),
-        "comp" => Some(shaderc::ShaderKind::Compute),
-        _ => None,
-    }
-}
-
-/// Shader modules in `root` (not recursive: includes live in subfolders), sorted by name.
-pub fn list_modules(root: &Path) -> std::io::Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    for entry in std::fs::read_dir(root)? {
-        let path = entry?.path();
-        if path.is_file() && shader_kind(&path).is_some() {
-            out.push(path);
-        }
-    }
-    out.sort();
-    Ok(out)
-}
-
-/// `#include "x"` targets named in a source text.
-fn includes_of(source: &str) -> impl Iterator<Item = &str> {
-    source.lines().filter_map(|line| {
-        let rest = line.trim_start().strip_prefix("#include")?;
-        let rest = rest.trim();
-        rest.strip_prefix('"')?.split('"').next()
-    })
-}
-
-/// Every file a module reads (itself and its includes, transitively), for change tracking.
-pub fn dependencies(root: &Path, module: &Path) -> Vec<PathBuf> {
-    let mut seen = vec![module.to_path_buf()];
-    let mut i = 0;
-    while i < seen.len() {
-        if let Ok(src) = std::fs::read_to_string(&seen[i]) {
-            let dir = seen[i].parent().unwrap_or(root).to_path_buf();
-            for inc in includes_of(&src) {
-                if let Some(p) = resolve_include(root, &dir, inc)
-                    && !seen.contains(&p)
-                {
-                    seen.push(p);
-                }
-            }
-        }
-        i += 1;
-    }
-    seen
-}
-
-/// True when the module traces rays, i.e. depends on `common/trace.glsl`.
-pub fn is_traced(root: &Path, module: &Path) -> bool {
-    let trace = root.join(TRACE_INCLUDE);
-    dependencies(root, module).contains(&trace)
-}
-
-/// Resolves an include relative to the including file's folder, then to the root. Refuses
-/// anything that resolves outside the root.
-fn resolve_include(root: &Path, including_dir: &Path, name: &str) -> Option<PathBuf> {
-    let root = root.canonicalize().ok()?;
-    [including_dir.join(name), root.join(name)]
-        .into_iter()
-        .filter_map(|p| p.canonicalize().ok())
-        .find(|p| p.starts_with(&root) && p.is_file())
-}
-
-/// Key under which a compiled module is stored: `file` or `file:variant`.
-pub fn module_key(module: &Path, variant: Option<&str>) -> String {
-    let name = module.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    match variant {
-        Some(v) => format!("{name}:{v}"),
-        None => name,
-    }
-}
+/// The compile options below in words, for shaders-spv/manifest.txt.
+pub const OPTIONS: &str = "Vulkan 1.2, SPIR-V 1.5, optimised for performance, debug info, \
+                           RT_RAY_QUERY=1 or RT_COMPUTE_BVH=1 per ray variant";
 
 /// Compiles one module (optionally for one ray variant) to SPIR-V words. Errors carry
-/// shaderc's `file:line: error: ...` text.
+/// shaderc's `file:line: error: ...` text, file names relative to `root`.
 pub fn compile(
     compiler: &shaderc::Compiler,
     root: &Path,
     module: &Path,
     variant_define: Option<&str>,
 ) -> Result<Vec<u32>, String> {
-    let kind = shader_kind(module).ok_or_else(|| format!("{}: not a shader stage", module.display()))?;
+    let kind = match stage_of(module) {
+        Some(Stage::Vertex) => shaderc::ShaderKind::Vertex,
+        Some(Stage::Fragment) => shaderc::ShaderKind::Fragment,
+        Some(Stage::Compute) => shaderc::ShaderKind::Compute,
+        None => return Err(format!("{}: not a shader stage", module.display())),
+    };
     let source = std::fs::read_to_string(module).map_err(|e| format!("{}: {e}", module.display()))?;
+    let name =
+        relative_name(root, module).ok_or_else(|| format!("{}: not inside {}", module.display(), root.display()))?;
     let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
     options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
     options.set_target_spirv(shaderc::SpirvVersion::V1_5);
@@ -112,15 +41,28 @@ pub fn compile(
         options.add_macro_definition(define, Some("1"));
     }
     let root_buf = root.to_path_buf();
-    options.set_include_callback(move |name, _ty, includer, _depth| {
-        let dir = Path::new(includer).parent().map(Path::to_path_buf).unwrap_or_else(|| root_buf.clone());
-        let path = resolve_include(&root_buf, &dir, name)
-            .ok_or_else(|| format!("{includer}: cannot find include \"{name}\" inside {}", root_buf.display()))?;
+    options.set_include_callback(move |inc, _ty, includer, _depth| {
+        // `includer` is a root-relative name: the module's or an earlier include's.
+        let dir = root_buf.join(includer).parent().map(Path::to_path_buf).unwrap_or_else(|| root_buf.clone());
+        let path = resolve_include(&root_buf, &dir, inc)
+            .ok_or_else(|| format!("{includer}: cannot find include \"{inc}\" inside {}", root_buf.display()))?;
         let content = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(shaderc::ResolvedInclude { resolved_name: path.to_string_lossy().into_owned(), content })
+        let resolved_name = relative_name(&root_buf, &path).unwrap_or_else(|| path.to_string_lossy().into_owned());
+        Ok(shaderc::ResolvedInclude { resolved_name, content })
     });
-    let name = module.to_string_lossy();
-    let artifact =
-        compiler.compile_into_spirv(&source, kind, &name, "main", Some(&options)).map_err(|e| e.to_string())?;
+    let artifact = compiler
+        .compile_into_spirv(&source, kind, &name, "main", Some(&options))
+        .map_err(|e| with_folder(root, &e.to_string()))?;
     Ok(artifact.as_binary().to_vec())
+}
+
+/// shaderc's messages name files relative to the root; the user gets `root/file:line: ...`.
+fn with_folder(root: &Path, message: &str) -> String {
+    let lines = message.lines().map(|line| match line.split_once(':') {
+        Some((file, rest)) if !file.is_empty() && root.join(file).is_file() => {
+            format!("{}:{rest}", root.join(file).display())
+        }
+        _ => line.to_string(),
+    });
+    lines.collect::<Vec<_>>().join("\n")
 }

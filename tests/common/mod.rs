@@ -44,6 +44,20 @@ pub fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Copies a folder tree (`to` is created).
+pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let dest = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_dir(&p, &dest);
+        } else {
+            std::fs::copy(&p, &dest).unwrap();
+        }
+    }
+}
+
 pub fn default_scene() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/default/cornell.gltf")
 }
