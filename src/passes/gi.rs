@@ -1,8 +1,10 @@
-//! gi: one bounce of diffuse global illumination with next-event estimation, demodulated by
-//! the diffuse albedo (shaders-glsl/gi.comp).
+//! gi: diffuse global illumination, one bounce ray per pixel with next-event estimation and the
+//! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
+//! (shaders-glsl/gi.comp).
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Read};
+use super::radiance_cache::Cache;
 use crate::gpu::vk;
 use crate::graph::{OutputDesc, Preview};
 use anyhow::Result;
@@ -15,7 +17,8 @@ pub const SPECULAR: &str = "gi.specular";
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GiSettings {
-    /// Scattering events after the primary surface (1: one bounce).
+    /// Path vertices traced after the primary surface before the radiance cache answers (1:
+    /// the cache answers at the bounce ray's hit); with the cache off, the bounces traced.
     pub bounces: u32,
 }
 
@@ -26,7 +29,7 @@ impl Default for GiSettings {
 }
 
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
-pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32) -> Result<FullscreenPass> {
+pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32, cache: &Cache) -> Result<FullscreenPass> {
     let inputs = [
         "gbuffer.depth",
         "gbuffer.normal",
@@ -43,5 +46,5 @@ pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32) ->
     ];
     let mut push: Vec<u8> = [s.bounces.max(1), seed].iter().flat_map(|v| v.to_le_bytes()).collect();
     push.extend_from_slice(&roughness_cutoff.to_le_bytes());
-    FullscreenPass::new(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, push)
+    FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), push)
 }

@@ -4,6 +4,7 @@
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Read};
+use super::radiance_cache::Cache;
 use crate::gpu::vk;
 use crate::graph::{OutputDesc, Preview};
 use anyhow::Result;
@@ -27,7 +28,16 @@ impl Default for ReflectionSettings {
 }
 
 /// `rough_specular`: gi's estimate of the lobe (gi.specular), passed on above the cut-off.
-pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: &str) -> Result<FullscreenPass> {
+/// `cache`: the radiance cache, which adds the indirect light of what the rays hit; without it
+/// the path goes on for `bounces` vertices (gi's setting).
+pub fn new(
+    b: &PassBuilder,
+    s: &ReflectionSettings,
+    seed: u32,
+    rough_specular: &str,
+    cache: &Cache,
+    bounces: u32,
+) -> Result<FullscreenPass> {
     let inputs = [
         "gbuffer.depth",
         "gbuffer.normal",
@@ -47,5 +57,6 @@ pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: &
     push.extend_from_slice(&s.rays.max(1).to_le_bytes());
     push.extend_from_slice(&s.roughness_cutoff.to_le_bytes());
     push.extend_from_slice(&seed.to_le_bytes());
-    FullscreenPass::new(b, NAME, &b.traced_shader("reflections.comp"), inputs, outputs, push)
+    push.extend_from_slice(&bounces.to_le_bytes());
+    FullscreenPass::with_buffers(b, NAME, &b.traced_shader("reflections.comp"), inputs, outputs, cache.buffers(), push)
 }
