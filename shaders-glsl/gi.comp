@@ -15,15 +15,20 @@
 //   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
 //   chosen) and the bounce ray hitting an emitter or escaping, combined with the power
 //   heuristic;
-// - one-bounce indirect light: at the bounce ray's hit, next-event estimation toward a light
-//   chosen by power (any kind, with a shadow ray); with `bounces` > 1 the path continues by
-//   BSDF sampling, with a light sample at each vertex.
+// - indirect light: at the bounce ray's hit, next-event estimation toward a light chosen by
+//   power (any kind, with a shadow ray), and the light that surface reflects from other
+//   surfaces from the radiance cache (every further bounce); with `bounces` > 1 the path first
+//   continues by BSDF sampling, with a light sample at each vertex, and the cache answers at the
+//   last one. Where the cache cannot answer (a corner, a cell still empty, or the cache off)
+//   the path traces on.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
+#define RC_BINDING 8
+#include "common/radiance_cache.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -37,42 +42,12 @@ layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
 layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_specular;
 
 layout(push_constant) uniform Params {
-    uint bounces;            // scattering events after the primary surface (1 = one bounce)
+    uint bounces;            // vertices traced after the primary surface before the cache answers
     uint seed;
     float roughness_cutoff;  // the reflections pass's: rougher surfaces get gi.specular
 } params;
 
 #define SALT_GI 0x67690000u
-
-// Light leaving surface `s` toward -dir: a light sample at s (all lights), and with more
-// bounces allowed, the rest of the path by BSDF sampling.
-vec3 outgoing(HitSurface s, vec3 dir, uint bounces_left, inout Rng rng) {
-    vec3 radiance = vec3(0.0);
-    vec3 throughput = vec3(1.0);
-    for (;;) {
-        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
-        vec3 v = -dir;
-        vec3 leave = offset_ray(s.position, s.normal_geo);
-        NeeSample ls = light_sample(leave, rng_next3(rng));
-        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) {
-            vec3 f = brdf_eval_cos(m, s.normal, v, ls.dir);
-            if (dot(f, f) > 0.0 && !trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
-                // The path ends here (no BSDF continuation can reach this light with MIS):
-                // full weight.
-                radiance += throughput * f * ls.weight;
-            }
-        }
-        if (--bounces_left == 0u) break;
-        BrdfSample bs = brdf_sample(m, s.normal, v, rng_next3(rng));
-        if (bs.pdf <= 0.0 || dot(bs.l, s.normal_geo) <= 0.0) break;
-        throughput *= bs.weight;
-        Hit h = trace_closest(leave, bs.l, 0.0, 1e6, RAY_MASK_ALL);
-        if (h.instance == NO_HIT) break;
-        dir = bs.l;
-        s = hit_surface(h.instance, h.primitive, h.bary, dir);
-    }
-    return radiance;
-}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -128,7 +103,10 @@ void main() {
                 float lp = light_pdf_emitter(h.instance, h.primitive, origin, s.position);
                 bounce += s.mat.emissive * mis_power(pdf, lp);
             }
-            bounce += outgoing(s, dir, max(params.bounces, 1u), rng);
+            uint traced = max(params.bounces, 1u);
+            uint vertices = rc.enabled != 0u ? max(traced, RC_VERTICES) : traced;
+            bounce += rc_radiance_leaving(s, dir, h.t, traced - 1u, vertices, true,
+                                          rc_copy_written(frame.frame_index), rng);
         }
         l_sum += lobe * bounce;
         if (rough) spec_sum += bounce * brdf_eval_specular_cos(m, n, v, dir) / pdf;

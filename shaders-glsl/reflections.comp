@@ -2,7 +2,7 @@
 // reflections: the specular lobe, ray traced. Per pixel `rays` directions drawn from the GGX
 // distribution of visible normals (a perfect mirror reflects exactly); each hit is shaded with
 // its emission and a light sample toward a light chosen by power (with a shadow ray); rays that
-// escape see the environment. Surfaces rougher than the cut-off trace nothing and take the
+// escape see the environment; the radiance cache adds the hit's indirect light. Surfaces rougher than the cut-off trace nothing and take the
 // specular estimate the gi pass made from its own samples (gi.specular). The output is the lobe's
 // contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
 // for the denoiser.
@@ -12,6 +12,8 @@
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
+#define RC_BINDING 9
+#include "common/radiance_cache.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -29,26 +31,21 @@ layout(push_constant) uniform Params {
     uint rays;                // specular rays per pixel
     float roughness_cutoff;   // rougher surfaces use the environment fallback
     uint seed;
+    uint bounces;             // with the cache off: path vertices traced from a hit (gi's)
 } params;
 
 #define SALT_REFLECTIONS 0x72656600u
 // Below this roughness the surface is a mirror: one exact reflection, no sampling.
 #define MIRROR_ROUGHNESS 0.01
 
-// Radiance leaving a hit toward -dir: emission plus one light sample.
+// Radiance leaving a hit toward -dir: emission, a light sample, and what the surface reflects
+// from other surfaces, from the radiance cache (with the cache off, the path traced on for as
+// many vertices as gi traces).
 vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
     HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
     vec3 radiance = emitter_visible_side(h.instance, h.primitive, dir) ? s.mat.emissive : vec3(0.0);
-    BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
-    vec3 leave = offset_ray(s.position, s.normal_geo);
-    NeeSample ls = light_sample(leave, rng_next3(rng));
-    if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) {
-        vec3 f = brdf_eval_cos(m, s.normal, -dir, ls.dir);
-        if (dot(f, f) > 0.0 && !trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
-            radiance += f * ls.weight;
-        }
-    }
-    return radiance;
+    uint vertices = rc.enabled != 0u ? RC_VERTICES : max(params.bounces, 1u);
+    return radiance + rc_radiance_leaving(s, dir, h.t, 0u, vertices, true, rc_copy_written(frame.frame_index), rng);
 }
 
 void main() {

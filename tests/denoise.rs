@@ -35,9 +35,13 @@ fn lum(img: &CpuImage) -> Vec<f64> {
 }
 
 /// The full frame (TAA on, so its jitter box-filters pixels as the reference does) with or
-/// without the denoiser, scene frozen.
+/// without the denoiser, scene frozen; without the radiance cache, so that the frame is the
+/// two-bounce estimate the reference below computes exactly and any difference is the
+/// denoiser's (tests/radiance_cache.rs checks the cache).
 fn settings(denoiser: bool) -> Settings {
-    Settings { width: SIZE, height: SIZE, frame_dt: 0.0, taa: true, denoiser, ..Default::default() }
+    let mut s = Settings { width: SIZE, height: SIZE, frame_dt: 0.0, taa: true, denoiser, ..Default::default() };
+    s.radiance_cache.enabled = false;
+    s
 }
 
 fn renderer(ctx: &Arc<Context>, scene: Scene, s: Settings) -> Renderer {

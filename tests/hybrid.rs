@@ -1,5 +1,6 @@
-//! The hybrid frame converges to the reference for what it models. With the denoiser off and
-//! the scene frozen, the average of many hybrid frames of the default scene is compared
+//! The hybrid frame converges to the reference for what it models. With the denoiser and the
+//! radiance cache off (tests/radiance_cache.rs checks the bounces the cache adds, against
+//! Mitsuba 3) and the scene frozen, the average of many hybrid frames of the default scene is compared
 //! with the reference path tracer limited to two scattering events (direct light and one
 //! bounce), which is what the hybrid frame computes: direct light from every light, one diffuse
 //! bounce with next-event estimation at its hit, and one specular bounce shaded with direct
@@ -78,7 +79,9 @@ fn accumulated_hybrid_frames_approach_the_two_bounce_reference() {
     let backend = common::auto_backend(&ctx);
     let shaders = ShaderLibrary::embedded();
     let scene = || load_gltf(&common::default_scene(), &LoadOptions::default()).unwrap();
-    let base = Settings { width: SIZE, height: SIZE, frame_dt: 0.0, denoiser: false, taa: true, ..Default::default() };
+    let mut base =
+        Settings { width: SIZE, height: SIZE, frame_dt: 0.0, denoiser: false, taa: true, ..Default::default() };
+    base.radiance_cache.enabled = false;
 
     let mut hybrid = Renderer::new(&ctx, &shaders, scene(), base.clone(), &CameraChoice::Default, backend).unwrap();
     let mut sum = vec![[0.0f64; 3]; (SIZE * SIZE) as usize];

@@ -14,7 +14,6 @@ use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
 use hybrid_rt::passes::gbuffer::NO_ID;
-use hybrid_rt::passes::gi::GiSettings;
 use hybrid_rt::passes::pathtrace;
 use hybrid_rt::render::{self, CameraChoice, Environment, RenderMode, Renderer, Settings, View};
 use hybrid_rt::scene::{Instance, LoadOptions, Material, Node, Scene, builtin, load_gltf};
@@ -128,8 +127,8 @@ fn reference(ctx: &Arc<Context>, scene: Scene, env: Environment, like: &Picture)
         width: W,
         height: H,
         environment: env,
-        // Scattering events: direct light plus the hybrid frame's GI bounces.
-        mode: RenderMode::Reference { seed: 3, max_bounces: 1 + GiSettings::default().bounces },
+        // Every bounce: the radiance cache carries them all in the hybrid frame.
+        mode: RenderMode::Reference { seed: 3, max_bounces: 16 },
         ..Default::default()
     };
     let mut r = Renderer::new(

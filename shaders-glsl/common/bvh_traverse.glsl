@@ -283,4 +283,8 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
     return bvh_trace(origin, dir, tmin, tmax, mask, false);
 }
 
+Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
+    return bvh_trace(origin, dir, tmin, tmax, mask, first_hit);
+}
+
 #endif

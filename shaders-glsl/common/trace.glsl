@@ -5,6 +5,10 @@
 // index in the mesh's index buffer, t along the (unnormalised) direction, barycentrics of
 // vertices 1 and 2, and whether the triangle was seen counter-clockwise (front face).
 // Candidates on alpha-masked instances pass through hit_alpha_accept (hit.glsl).
+// trace_ray(..., first_hit) is both in one: with first_hit, any hit ends the ray (its t and
+// barycentrics are then of whichever hit that was). Every call of a trace function inlines a
+// whole traversal when lavapipe compiles the shader, so a shader that traces several kinds of
+// ray in a loop through one trace_ray call compiles several times faster.
 #ifndef TRACE_GLSL
 #define TRACE_GLSL
 
@@ -45,9 +49,10 @@ bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
     return rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
 }
 
-Hit trace_closest(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
+Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
     rayQueryEXT q;
-    rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsNoneEXT, mask, origin, tmin, dir, tmax);
+    uint flags = first_hit ? gl_RayFlagsTerminateOnFirstHitEXT : gl_RayFlagsNoneEXT;
+    rayQueryInitializeEXT(q, scene_tlas, flags, mask, origin, tmin, dir, tmax);
     TRACE_RUN(q);
     Hit h;
     if (rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionTriangleEXT) {
@@ -60,6 +65,10 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
     h.bary = rayQueryGetIntersectionBarycentricsEXT(q, true);
     h.front_face = rayQueryGetIntersectionFrontFaceEXT(q, true);
     return h;
+}
+
+Hit trace_closest(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
+    return trace_ray(origin, dir, tmin, tmax, mask, false);
 }
 
 #elif defined(RT_COMPUTE_BVH)

@@ -361,6 +361,7 @@ impl Viewer {
             compiling: self.watcher.as_ref().is_some_and(|w| w.compiling()),
             shader_error: self.shader_error.as_deref(),
             message: &self.message,
+            radiance_cache: self.renderer.radiance_cache_stats(),
         };
         let mut edit = self.edit.clone();
         let mut actions = Vec::new();

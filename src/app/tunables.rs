@@ -120,7 +120,36 @@ pub static ALL: &[Tunable] = &[
         |s| s.reflections.roughness_cutoff,
         f32
     ),
-    tunable!("gi_bounces", "GI", "scattering events after the primary hit", int(1, 4), true, |s| s.gi.bounces, u32),
+    tunable!(
+        "gi_bounces",
+        "GI",
+        "path vertices traced before the radiance cache",
+        int(1, 4),
+        true,
+        |s| s.gi.bounces,
+        u32
+    ),
+    tunable!("radiance_cache", "GI", "world-space cache of indirect light where rays end", bool, |s| s
+        .radiance_cache
+        .enabled),
+    tunable!(
+        "cache_budget",
+        "GI",
+        "radiance-cache cells updated per frame",
+        int(256, 65536),
+        true,
+        |s| s.radiance_cache.budget,
+        u32
+    ),
+    tunable!(
+        "cache_cells",
+        "GI",
+        "radiance-cache cells along the scene's diagonal",
+        float(8.0, 256.0, true),
+        true,
+        |s| s.radiance_cache.cells_per_diagonal,
+        f32
+    ),
     tunable!("atrous", "Denoiser", "a-trous iterations", int(1, 6), true, |s| s.denoise.iterations, u32),
     tunable!("sigma_z", "Denoiser", "depth edge-stopping", float(0.01, 10.0, true), true, |s| s.denoise.sigma_z, f32),
     tunable!(

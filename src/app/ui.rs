@@ -35,6 +35,8 @@ pub struct Info<'a> {
     pub shader_error: Option<&'a str>,
     /// The last thing done (a saved screenshot, a reload), for the user to see.
     pub message: &'a str,
+    /// The radiance cache's live and updated cells in the last frame, when the frame has one.
+    pub radiance_cache: Option<crate::passes::radiance_cache::CacheStats>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -68,6 +70,9 @@ pub fn draw(ctx: &egui::Context, info: &Info, settings: &mut Settings) -> Vec<Ac
                 1000.0 / info.frame_ms.max(1e-3),
                 info.present_mode
             ));
+            if let Some(c) = info.radiance_cache {
+                ui.label(format!("radiance cache: {} live cells, {} updated", c.live, c.updated));
+            }
             ui.horizontal(|ui| {
                 if ui.button("Screenshot").on_hover_text("saves the shown image, without this overlay").clicked() {
                     actions.push(Action::Screenshot);

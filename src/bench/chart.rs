@@ -1,5 +1,7 @@
-//! The sweep's chart: frame time against HDR-FLIP, one labelled point per configuration,
-//! the Pareto front as a line, and the reference's noise floor as a dashed line. The same
+//! The sweep's chart: time against HDR-FLIP, one labelled point per configuration, the Pareto
+//! front as a line, the path tracer's curve (1, 2, 4, ... spp, each at the time all its samples
+//! took) on the same axes, and the reference's noise floor as a dashed line. Labels are placed
+//! so that none overlaps another, a point or the legend. The same
 //! drawing goes to SVG (text as text) and to PNG (text rasterised with an embedded font, so
 //! no system fonts are needed).
 
@@ -182,35 +184,45 @@ where
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
     let points: Vec<_> = s.points.iter().filter(|p| p.frame_ms.is_finite() && p.flip > 0.0).collect();
-    let max_ms = points.iter().map(|p| p.frame_ms).fold(1e-3, f64::max);
+    let path_tracer: Vec<_> = s.path_tracer.iter().filter(|p| p.ms.is_finite() && p.ms > 0.0 && p.flip > 0.0).collect();
     let noise = s.reference.made.noise_flip;
-    // Log scale: FLIP spans several factors between the raw and the denoised frames.
-    let (lo, hi) = points
-        .iter()
-        .map(|p| p.flip)
-        .chain([noise])
-        .filter(|v| *v > 0.0)
-        .fold((1.0, 1e-6), |(lo, hi), v| (f64::min(lo, v), f64::max(hi, v)));
-    let (lo, hi) = if lo < hi { (lo / 1.25, hi * 1.25) } else { (0.01, 1.0) };
+    // Log scales: FLIP spans several factors between the raw and the denoised frames, time
+    // two orders of magnitude between one frame and the path tracer's last point.
+    let range = |values: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = values.filter(|v| *v > 0.0).fold((f64::MAX, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        if lo < hi {
+            (lo / 1.25, hi * 1.25)
+        } else if hi > 0.0 {
+            (hi / 2.0, hi * 2.0)
+        } else {
+            (0.01, 1.0)
+        }
+    };
+    let (lo, hi) = range(&mut points.iter().map(|p| p.flip).chain(path_tracer.iter().map(|p| p.flip)).chain([noise]));
+    let (lo_ms, hi_ms) = range(&mut points.iter().map(|p| p.frame_ms).chain(path_tracer.iter().map(|p| p.ms)));
     let title = format!("{}, {}x{}, {} backend, {}", s.scene_name, s.width, s.height, s.backend, s.device);
     let mut chart = ChartBuilder::on(root)
         .caption(title, (FONT, 22))
         .margin(18)
         .x_label_area_size(50)
         .y_label_area_size(70)
-        .build_cartesian_2d(0.0..max_ms * 1.15, (lo..hi).log_scale().with_key_points(log_ticks(lo, hi)))
+        .build_cartesian_2d(
+            (lo_ms..hi_ms).log_scale().with_key_points(log_ticks(lo_ms, hi_ms)),
+            (lo..hi).log_scale().with_key_points(log_ticks(lo, hi)),
+        )
         .map_err(err)?;
     chart
         .configure_mesh()
         .x_desc(format!(
-            "frame time, ms (wall clock, record to fence; median of {} round(s) x {} frames after {} warm-up)",
+            "time, ms: one hybrid frame (median of {} round(s) x {} frames after {} warm-up), or all of the path \
+             tracer's samples",
             s.rounds.max(1),
             s.timed_frames,
             s.frames - s.timed_frames
         ))
         .y_desc(format!("HDR-FLIP against a {} spp path-traced reference", s.reference.made.spp))
         .y_label_formatter(&|v| tick_label(*v))
-        .x_label_formatter(&|v| format!("{v:.0}"))
+        .x_label_formatter(&|v| tick_label(*v))
         .label_style((FONT, 14))
         .axis_desc_style((FONT, 16))
         .light_line_style(WHITE.mix(0.0))
@@ -227,26 +239,39 @@ where
     chart
         .draw_series(LineSeries::new(front, front_color.stroke_width(2)))
         .map_err(err)?
-        .label("Pareto front")
+        .label("Pareto front of the hybrid frame (after its frames of history)")
         .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], front_color.stroke_width(2)));
+    let pt_color = RGBColor(20, 110, 60);
+    if !path_tracer.is_empty() {
+        chart
+            .draw_series(LineSeries::new(path_tracer.iter().map(|p| (p.ms, p.flip)), pt_color.stroke_width(2)))
+            .map_err(err)?
+            .label("path tracer, 1, 2, 4, ... spp (no history)")
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], pt_color.stroke_width(2)));
+    }
     if noise > 0.0 {
         let grey = RGBColor(120, 120, 120);
         chart
-            .draw_series(DashedLineSeries::new([(0.0, noise), (max_ms * 1.15, noise)], 6, 4, grey.stroke_width(1)))
+            .draw_series(DashedLineSeries::new([(lo_ms, noise), (hi_ms, noise)], 6, 4, grey.stroke_width(1)))
             .map_err(err)?
             .label("reference noise (FLIP between its two halves)")
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], grey.stroke_width(1)));
     }
     let on = RGBColor(30, 30, 30);
     let off = RGBColor(110, 110, 170);
-    chart
-        .draw_series(points.iter().map(|p| {
-            let (color, size) = if p.pareto { (on, 5) } else { (off, 4) };
-            EmptyElement::at((p.frame_ms, p.flip))
-                + Circle::new((0, 0), size, color.filled())
-                + Text::new(p.name.clone(), (7, -14), (FONT, 13).into_font().color(&color))
-        }))
-        .map_err(err)?;
+    // Every point with its label's text and colour: the configurations, then the path tracer.
+    let mut marks: Vec<((f64, f64), String, RGBColor, u32)> = points
+        .iter()
+        .map(|p| {
+            if p.pareto {
+                ((p.frame_ms, p.flip), p.name.clone(), on, 5)
+            } else {
+                ((p.frame_ms, p.flip), p.name.clone(), off, 4)
+            }
+        })
+        .collect();
+    marks.extend(path_tracer.iter().map(|p| ((p.ms, p.flip), format!("{} spp", p.spp), pt_color, 4)));
+    chart.draw_series(marks.iter().map(|(at, _, color, size)| Circle::new(*at, *size, color.filled()))).map_err(err)?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperRight)
@@ -255,8 +280,91 @@ where
         .border_style(BLACK.mix(0.4))
         .draw()
         .map_err(err)?;
+
+    // Labels last, placed in pixels so that none overlaps another, a point or the legend.
+    let anchors: Vec<(i32, i32)> = marks.iter().map(|(at, ..)| chart.backend_coord(at)).collect();
+    let font: TextStyle = (FONT, 13).into();
+    let sizes: Vec<(i32, i32)> = marks
+        .iter()
+        .map(|(_, text, ..)| root.estimate_text_size(text, &font).map(|(w, h)| (w as i32, h as i32)))
+        .collect::<Result<_, _>>()
+        .map_err(err)?;
+    let (xr, yr) = (chart.plotting_area().get_pixel_range().0, chart.plotting_area().get_pixel_range().1);
+    let plot = Rect { x: xr.start, y: yr.start, w: xr.end - xr.start, h: yr.end - yr.start };
+    let legend_rows = 2 + (!path_tracer.is_empty()) as i32;
+    let legend = Rect { x: plot.x + plot.w - 470, y: plot.y, w: 470, h: 12 + 22 * legend_rows };
+    for (((_, text, color, _), anchor), place) in
+        marks.iter().zip(&anchors).zip(place_labels(&anchors, &sizes, plot, &[legend]))
+    {
+        let style = font.color(color);
+        if (place.x - anchor.0).abs().max((place.y - anchor.1).abs()) > 40 {
+            // Far from its point: a thin leader says whose label it is.
+            let to = (place.x.clamp(anchor.0.min(place.x + place.w), place.x + place.w), place.y + place.h / 2);
+            root.draw(&PathElement::new([*anchor, to], color.mix(0.5).stroke_width(1))).map_err(err)?;
+        }
+        root.draw(&Text::new(text.clone(), (place.x, place.y), style)).map_err(err)?;
+    }
     root.present().map_err(err)?;
     Ok(())
+}
+
+/// A box in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rect {
+    x: i32,
+    y: i32,
+    w: i32,
+    h: i32,
+}
+
+impl Rect {
+    fn overlaps(&self, o: &Rect) -> bool {
+        self.x < o.x + o.w && o.x < self.x + self.w && self.y < o.y + o.h && o.y < self.y + self.h
+    }
+
+    fn inside(&self, o: &Rect) -> bool {
+        self.x >= o.x && self.y >= o.y && self.x + self.w <= o.x + o.w && self.y + self.h <= o.y + o.h
+    }
+}
+
+/// Boxes for labels of `sizes` beside the points at `anchors`: for each label in turn, the
+/// first spot, on rings of growing distance around its point, that stays inside `area` and
+/// overlaps no label placed before, no point and none of `keep_clear`. A label that finds none
+/// takes its first spot (a chart this crowded has a point on every spot near it).
+fn place_labels(anchors: &[(i32, i32)], sizes: &[(i32, i32)], area: Rect, keep_clear: &[Rect]) -> Vec<Rect> {
+    const MARK: i32 = 6;
+    let mut taken: Vec<Rect> =
+        anchors.iter().map(|&(x, y)| Rect { x: x - MARK, y: y - MARK, w: 2 * MARK, h: 2 * MARK }).collect();
+    taken.extend_from_slice(keep_clear);
+    let mut out = Vec::with_capacity(anchors.len());
+    for (&(x, y), &(w, h)) in anchors.iter().zip(sizes) {
+        let candidates = [4, 12, 24, 40, 60, 85, 115].into_iter().flat_map(|r| {
+            [
+                (x + r, y - r - h),
+                (x + r, y + r),
+                (x - r - w, y - r - h),
+                (x - r - w, y + r),
+                (x + r, y - h / 2),
+                (x - r - w, y - h / 2),
+                (x - w / 2, y - r - h),
+                (x - w / 2, y + r),
+            ]
+        });
+        let mut first = None;
+        let mut chosen = None;
+        for (cx, cy) in candidates {
+            let b = Rect { x: cx, y: cy, w, h };
+            first.get_or_insert(b);
+            if b.inside(&area) && !taken.iter().any(|t| t.overlaps(&b)) {
+                chosen = Some(b);
+                break;
+            }
+        }
+        let b = chosen.or(first).expect("candidates are never empty");
+        taken.push(b);
+        out.push(b);
+    }
+    out
 }
 
 /// A tick value with as many decimals as its leading digit needs (0.3, not 0.30000000000000004).
@@ -283,7 +391,7 @@ fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::sweep::{Point, ReferenceInfo, ReferenceMade};
+    use crate::bench::sweep::{PathTracerPoint, Point, ReferenceInfo, ReferenceMade};
 
     fn sweep(points: &[(&str, f64, f64, bool)]) -> SceneSweep {
         let made = ReferenceMade {
@@ -332,6 +440,10 @@ mod tests {
             reference: ReferenceInfo { path: "r.exr".into(), cached: false, seconds: 1.0, made },
             pareto_front: points.iter().filter(|p| p.pareto).map(|p| p.name.clone()).collect(),
             points,
+            path_tracer: [(1, 9.0, 0.5), (2, 18.0, 0.36), (4, 36.0, 0.25), (8, 72.0, 0.18)]
+                .iter()
+                .map(|&(spp, ms, flip)| PathTracerPoint { spp, ms, flip })
+                .collect(),
             seconds: 1.0,
         }
     }
@@ -351,11 +463,31 @@ mod tests {
         assert_eq!((img.width(), img.height()), SIZE);
         let text = std::fs::read_to_string(&svg).unwrap();
         assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
-        for label in ["d4-s5-b1-r1", "Pareto front", "test scene, 320x180"] {
+        for label in ["d4-s5-b1-r1", "Pareto front", "test scene, 320x180", "8 spp", "path tracer"] {
             assert!(text.contains(label), "the SVG lacks '{label}'");
         }
         if std::env::var_os("HYBRID_RT_KEEP_CHART").is_none() {
             std::fs::remove_dir_all(&dir).unwrap();
+        }
+    }
+
+    #[test]
+    fn crowded_labels_do_not_overlap() {
+        let area = Rect { x: 0, y: 0, w: 1000, h: 600 };
+        // Twelve points within a few pixels of each other, and a row of close neighbours.
+        let mut anchors: Vec<(i32, i32)> = (0..12).map(|i| (500 + i % 4 * 3, 300 + i / 4 * 3)).collect();
+        anchors.extend((0..8).map(|i| (100 + i * 30, 500)));
+        let sizes = vec![(90, 14); anchors.len()];
+        let legend = Rect { x: 700, y: 0, w: 300, h: 80 };
+        let placed = place_labels(&anchors, &sizes, area, &[legend]);
+        for (i, a) in placed.iter().enumerate() {
+            assert!(a.inside(&area) && !a.overlaps(&legend), "label {i} at {a:?}");
+            for (j, b) in placed.iter().enumerate().skip(i + 1) {
+                assert!(!a.overlaps(b), "labels {i} {a:?} and {j} {b:?} overlap");
+            }
+            for &(x, y) in &anchors {
+                assert!(!a.overlaps(&Rect { x: x - 6, y: y - 6, w: 12, h: 12 }), "label {i} covers a point");
+            }
         }
     }
 

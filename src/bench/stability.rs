@@ -18,7 +18,9 @@ use crate::passes::gbuffer;
 use crate::passes::shadows::HARD_VISIBILITY;
 use crate::render::{CameraChoice, Renderer, Settings, ViewOverride};
 use crate::scene::Scene;
-use crate::scene::builtin_stability::{self as scenes, grazing_facts, leak_facts, lights_facts, slide_facts};
+use crate::scene::builtin_stability::{
+    self as scenes, cache_leak_facts, grazing_facts, leak_facts, lights_facts, slide_facts,
+};
 use anyhow::{Context as _, Result};
 use glam::{Vec2, Vec3};
 use serde::Serialize;
@@ -59,6 +61,31 @@ fn measure(metric: &'static str, unit: &'static str, value: f64, bound: f64) -> 
     Measure { metric, unit, value, bound }
 }
 
+/// **Cache leak** in `stability-cache-leak`: two rooms on one floor split by a zero-thickness
+/// wall, a point light in one, a camera above both, so the radiance cache's floor cells
+/// straddle the wall. Metric: the mean luminance of the dark room's floor after 16 frames
+/// (the cache fills and converges meanwhile) relative to the median of the lit room's floor;
+/// the true value is 0. The raw frame tests the cache; the denoised one adds SVGF's blur
+/// across the wall's edge, where the two floors meet on screen at the same depth and normal.
+pub fn cache_leak(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use cache_leak_facts::*;
+    let mut r = renderer(rig, scenes::cache_leak(), denoised, 0.0, 0)?;
+    let mut lum = Vec::new();
+    for _ in 0..16 {
+        lum = next_luminance(&mut r)?;
+    }
+    let id = ids(&r.read_output(gbuffer::IDS)?);
+    let mut lit: Vec<f32> = (0..id.len()).filter(|&i| id[i] == LIT_FLOOR_INSTANCE).map(|i| lum[i]).collect();
+    let lit = median(&mut lit) as f64;
+    let dark: Vec<f64> = (0..id.len()).filter(|&i| id[i] == DARK_FLOOR_INSTANCE).map(|i| lum[i] as f64).collect();
+    if lit <= 0.0 || dark.is_empty() {
+        anyhow::bail!("the camera sees no lit floor or no dark floor");
+    }
+    let dark_mean = dark.iter().sum::<f64>() / dark.len() as f64;
+    let bound = if denoised { 0.03 } else { 1e-4 };
+    Ok(vec![measure("dark room's floor / lit floor", "fraction", dark_mean / lit, bound)])
+}
+
 /// A scenario of the suite: its name and the function that renders it in one configuration
 /// (`true`: denoised).
 pub type ScenarioFn = fn(&Rig, bool) -> Result<Vec<Measure>>;
@@ -71,6 +98,7 @@ pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
     ("moving light", moving_light),
     ("light off", light_off),
     ("leaking", leaking),
+    ("cache leak", cache_leak),
     ("grazing floor", grazing_floor),
     ("fireflies", fireflies),
 ];

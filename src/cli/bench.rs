@@ -136,8 +136,8 @@ struct SweepArgs {
     #[arg(long, value_delimiter = ',', default_value = "320x180")]
     size: Vec<String>,
     /// Configurations, comma-separated, e.g. d4-s5-b1-r1 (d: SVGF iterations, 0 = denoiser off;
-    /// s: shadow s_max; b: GI bounces; r: reflection rays; t0: TAA off). Default: 14
-    /// configurations (see src/bench/sweep.rs).
+    /// s: shadow s_max; b: GI bounces; r: reflection rays; t0: TAA off; c0: radiance cache off).
+    /// Default: 18 configurations (see src/bench/sweep/config.rs).
     #[arg(long, value_delimiter = ',')]
     configs: Vec<String>,
     /// Frames per configuration (static camera); the error is measured on the last.
@@ -156,6 +156,10 @@ struct SweepArgs {
     /// Scattering events per reference path at most (Russian roulette ends them earlier).
     #[arg(long, default_value_t = 256)]
     reference_bounces: u32,
+    /// The path tracer's curve on the same axes: 1, 2, 4, ... up to this many samples per
+    /// pixel, each timed and compared with the reference like the configurations (0: none).
+    #[arg(long, default_value_t = 64)]
+    pt_spp: u32,
     /// Render the reference again even when it is cached (and replace the cached one).
     #[arg(long)]
     fresh_reference: bool,
@@ -229,6 +233,7 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
                 rounds: a.rounds,
                 reference_spp: a.reference_spp,
                 reference_bounces: a.reference_bounces,
+                path_tracer_spp: a.pt_spp,
                 camera: a.camera.clone().unwrap_or_default(),
                 cache_dir: a.cache_dir.clone(),
                 fresh_reference: a.fresh_reference,

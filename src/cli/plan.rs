@@ -47,6 +47,9 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         if plan.soft_shadows { "adaptive soft shadows" } else { "one hard ray per light" }
     );
     println!("  shadows_penumbra/tent/filter {}", on(plan.soft_shadows));
+    let cache = Settings::default().radiance_cache;
+    let cache_used = plan.gi || plan.reflections;
+    println!("  radiance_cache           {}", on(cache_used));
     println!("  gi                       {}", on(plan.gi));
     println!("  reflections              {}", on(plan.reflections));
     println!("  svgf chains, composite, taa, tonemap, history  run");
@@ -55,6 +58,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         println!("  - {r}");
     }
     println!("  - lighting: {}", lighting.note);
+    println!("  - {}", crate::passes::radiance_cache::describe(&cache, cache_used, plan.scene_diagonal));
     println!("(`hybrid-rt render --full` runs every pass)");
     Ok(())
 }

@@ -45,9 +45,17 @@ pub struct RenderArgs {
     /// Turn the SVGF denoiser off: the raw one-sample-per-pixel signals are composited.
     #[arg(long)]
     no_denoise: bool,
-    /// Bounces of indirect light traced by the gi pass.
+    /// Path vertices the gi pass traces before the radiance cache answers (with the cache
+    /// off: the bounces traced).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
     gi_bounces: Option<u32>,
+    /// Turn the radiance cache off: gi and reflection rays trace a few bounces on instead of
+    /// asking the cache where they end.
+    #[arg(long)]
+    no_radiance_cache: bool,
+    /// Radiance-cache cells updated per frame at most.
+    #[arg(long, value_name = "CELLS", value_parser = clap::value_parser!(u32).range(1..=1_048_576))]
+    cache_budget: Option<u32>,
     /// Seed of the frame's random streams (same seed, settings and backend: same image).
     #[arg(long)]
     seed: Option<u32>,
@@ -111,6 +119,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     };
     if let Some(b) = a.gi_bounces {
         settings.gi.bounces = b;
+    }
+    settings.radiance_cache.enabled = !a.no_radiance_cache;
+    if let Some(b) = a.cache_budget {
+        settings.radiance_cache.budget = b;
     }
     if let Some(seed) = a.seed {
         settings.seed = seed;

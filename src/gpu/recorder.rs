@@ -260,6 +260,13 @@ impl<'a> Recorder<'a> {
         unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &regions) };
     }
 
+    /// Fills a whole buffer with zeros (a transfer: callers put barriers around it).
+    pub fn zero_buffer(&self, buffer: &Buffer) {
+        // SAFETY: recording; the buffer is borrowed (live) and was made with TRANSFER_DST by
+        // callers of this function; WHOLE_SIZE fills it to its end.
+        unsafe { self.ctx.device.cmd_fill_buffer(self.cmd, buffer.raw, 0, vk::WHOLE_SIZE, 0) };
+    }
+
     /// Clears a colour image to zero (all bits zero, whatever its format).
     pub fn clear_image(&self, image: &Image) {
         let color = vk::ClearColorValue { uint32: [0; 4] };

@@ -3,10 +3,11 @@
 //! the pass's `#[repr(C)]` push-constant struct.
 
 use super::PassBuilder;
-use crate::gpu::{Binding, BindingKind, DescriptorSetLayout, Pipeline, PushResource, Sampler, SamplerDesc, vk};
+use crate::gpu::{Binding, BindingKind, Buffer, DescriptorSetLayout, Pipeline, PushResource, Sampler, SamplerDesc, vk};
 use crate::graph::{OutputDesc, Pass, PassContext, PassDesc, PassKind, Resource, ShaderInterface};
 use anyhow::Result;
 use bytemuck::Pod;
+use std::sync::Arc;
 
 /// How a shader reads an input image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,7 +78,21 @@ pub struct FullscreenPass {
     push_constants: Vec<u8>,
     /// Outputs zeroed before the dispatch (sums the shader accumulates with atomics).
     clears: Vec<Resource>,
+    /// Storage buffers bound after the outputs, shared with other passes and kept across
+    /// frames (the radiance cache's), with the GLSL names of their blocks.
+    buffers: Vec<(&'static str, Arc<Buffer>)>,
+    /// Workgroups to dispatch; None: one invocation per pixel of the frame.
+    pub groups: Option<[u32; 3]>,
 }
+
+/// Compute-shader storage access, on both sides of the barrier before a pass that shares
+/// buffers with others.
+pub const SHARED_BUFFER_ACCESS: (vk::PipelineStageFlags2, vk::AccessFlags2) = (
+    vk::PipelineStageFlags2::COMPUTE_SHADER,
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::SHADER_STORAGE_READ.as_raw() | vk::AccessFlags2::SHADER_STORAGE_WRITE.as_raw(),
+    ),
+);
 
 /// Workgroup size of every full-screen compute shader (`local_size_x/y`).
 pub const GROUP: (u32, u32) = (8, 8);
@@ -91,8 +106,22 @@ impl FullscreenPass {
         outputs: Vec<OutputDesc>,
         push_constants: &impl Pod,
     ) -> Result<Self> {
+        Self::with_buffers(b, name, shader_key, inputs, outputs, Vec::new(), push_constants)
+    }
+
+    /// A pass that also reads and writes `buffers` (GLSL block name, buffer), bound after its
+    /// outputs.
+    pub fn with_buffers(
+        b: &PassBuilder,
+        name: &str,
+        shader_key: &str,
+        inputs: Vec<Input>,
+        outputs: Vec<OutputDesc>,
+        buffers: Vec<(&'static str, Arc<Buffer>)>,
+        push_constants: &impl Pod,
+    ) -> Result<Self> {
         let push_constants = bytemuck::bytes_of(push_constants).to_vec();
-        let bindings: Vec<Binding> = binding_kinds(&inputs, &outputs)
+        let bindings: Vec<Binding> = binding_kinds(&inputs, &outputs, buffers.len())
             .enumerate()
             .map(|(i, kind)| Binding { binding: i as u32, kind, count: 1 })
             .collect();
@@ -111,11 +140,19 @@ impl FullscreenPass {
             outputs,
             push_constants,
             clears: Vec::new(),
+            buffers,
+            groups: None,
         })
     }
 }
 
 impl FullscreenPass {
+    /// Replaces the push constants from the next dispatch on (a pass recorded twice a frame in
+    /// two modes).
+    pub fn set_push_constants(&mut self, push_constants: &impl Pod) {
+        self.push_constants = bytemuck::bytes_of(push_constants).to_vec();
+    }
+
     /// Zero `output` (one of this pass's outputs) before every dispatch.
     pub fn clear_before_dispatch(&mut self, output: crate::graph::Output) {
         self.clears.push(output.into());
@@ -123,12 +160,17 @@ impl FullscreenPass {
 }
 
 /// The descriptor kind of each binding of set 1, in binding order.
-fn binding_kinds<'a>(inputs: &'a [Input], outputs: &'a [OutputDesc]) -> impl Iterator<Item = BindingKind> + 'a {
+fn binding_kinds<'a>(
+    inputs: &'a [Input],
+    outputs: &'a [OutputDesc],
+    buffers: usize,
+) -> impl Iterator<Item = BindingKind> + 'a {
     let read = inputs.iter().map(|i| match i.read {
         Read::Texel => BindingKind::StorageImage,
         Read::Filtered => BindingKind::SampledImage,
     });
     read.chain(outputs.iter().map(|_| BindingKind::StorageImage))
+        .chain(std::iter::repeat_n(BindingKind::StorageBuffer, buffers))
 }
 
 impl Pass for FullscreenPass {
@@ -170,24 +212,38 @@ impl Pass for FullscreenPass {
             })
             .collect();
         resources.extend(self.outputs.iter().map(|o| PushResource::StorageImage(ctx.images.view(o.name))));
+        resources.extend(self.buffers.iter().map(|(_, b)| PushResource::StorageBuffer(b.raw)));
+        if !self.buffers.is_empty() {
+            // The graph orders images only: the shared buffers get a barrier of their own
+            // against whatever pass (this frame or the last) wrote or read them before.
+            rec.memory_barrier(SHARED_BUFFER_ACCESS, SHARED_BUFFER_ACCESS);
+        }
         rec.bind_pipeline(&self.pipeline);
         rec.bind_scene_set(&self.pipeline, ctx.scene.set.raw);
         rec.push_set(&self.pipeline, &resources);
         if !self.push_constants.is_empty() {
             rec.push_constants(&self.pipeline, &self.push_constants);
         }
-        rec.dispatch_2d(ctx.extent, GROUP);
+        match self.groups {
+            Some([x, y, z]) => rec.dispatch(x, y, z),
+            None => rec.dispatch_2d(ctx.extent, GROUP),
+        }
         Ok(())
     }
 
     fn shader_interface(&self) -> Option<ShaderInterface> {
-        let names = self.inputs.iter().map(|i| i.binding.clone()).chain(self.outputs.iter().map(|o| match o.name {
-            Resource::Output(out) => format!("out_{}", out.name),
-            other => format!("out_{other}"),
-        }));
+        let names = self
+            .inputs
+            .iter()
+            .map(|i| i.binding.clone())
+            .chain(self.outputs.iter().map(|o| match o.name {
+                Resource::Output(out) => format!("out_{}", out.name),
+                other => format!("out_{other}"),
+            }))
+            .chain(self.buffers.iter().map(|(name, _)| name.to_string()));
         Some(ShaderInterface {
             shader: self.shader.clone(),
-            bindings: names.zip(binding_kinds(&self.inputs, &self.outputs)).collect(),
+            bindings: names.zip(binding_kinds(&self.inputs, &self.outputs, self.buffers.len())).collect(),
             push_constant_size: self.push_constants.len(),
         })
     }

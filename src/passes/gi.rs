@@ -1,9 +1,11 @@
-//! gi: one bounce of diffuse global illumination with next-event estimation, demodulated by
-//! the diffuse albedo (shaders-glsl/gi.comp).
+//! gi: diffuse global illumination, one bounce ray per pixel with next-event estimation and the
+//! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
+//! (shaders-glsl/gi.comp).
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::gbuffer;
+use super::radiance_cache::Cache;
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview};
 use anyhow::Result;
@@ -26,7 +28,8 @@ pub struct Params {
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct GiSettings {
-    /// Scattering events after the primary surface (1: one bounce).
+    /// Path vertices traced after the primary surface before the radiance cache answers (1:
+    /// the cache answers at the bounce ray's hit); with the cache off, the bounces traced.
     pub bounces: u32,
 }
 
@@ -37,7 +40,7 @@ impl Default for GiSettings {
 }
 
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
-pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32) -> Result<FullscreenPass> {
+pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32, cache: &Cache) -> Result<FullscreenPass> {
     let inputs =
         [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::NORMAL_GEO, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::IDS]
             .map(Input::texel)
@@ -47,5 +50,5 @@ pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32) ->
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
     ];
     let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff };
-    FullscreenPass::new(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, &push)
+    FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)
 }

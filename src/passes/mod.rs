@@ -10,6 +10,7 @@ pub mod history;
 pub mod inject;
 pub mod pathtrace;
 pub mod primary_rays;
+pub mod radiance_cache;
 pub mod reflections;
 pub mod shadows;
 pub mod svgf;

@@ -5,6 +5,7 @@
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::gbuffer;
+use super::radiance_cache::Cache;
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
@@ -23,6 +24,7 @@ pub struct Params {
     pub rays: u32,
     pub roughness_cutoff: f32,
     pub seed: u32,
+    pub bounces: u32,
 }
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -40,8 +42,16 @@ impl Default for ReflectionSettings {
 }
 
 /// `rough_specular`: gi's estimate of the lobe (gi.specular, or zero), passed on above the
-/// cut-off (bound as `in_specular`).
-pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: Resource) -> Result<FullscreenPass> {
+/// cut-off (bound as `in_specular`). `cache`: the radiance cache, which adds the indirect light
+/// of what the rays hit; without it the path goes on for `bounces` vertices (gi's setting).
+pub fn new(
+    b: &PassBuilder,
+    s: &ReflectionSettings,
+    seed: u32,
+    rough_specular: Resource,
+    cache: &Cache,
+    bounces: u32,
+) -> Result<FullscreenPass> {
     let mut inputs: Vec<Input> =
         [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::NORMAL_GEO, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::IDS]
             .map(Input::texel)
@@ -51,6 +61,6 @@ pub fn new(b: &PassBuilder, s: &ReflectionSettings, seed: u32, rough_specular: R
         OutputDesc::storage(RADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         OutputDesc::storage(HIT_DISTANCE, vk::Format::R32_SFLOAT, Preview::Depth),
     ];
-    let push = Params { rays: s.rays.max(1), roughness_cutoff: s.roughness_cutoff, seed };
-    FullscreenPass::new(b, NAME, &b.traced_shader("reflections.comp"), inputs, outputs, &push)
+    let push = Params { rays: s.rays.max(1), roughness_cutoff: s.roughness_cutoff, seed, bounces };
+    FullscreenPass::with_buffers(b, NAME, &b.traced_shader("reflections.comp"), inputs, outputs, cache.buffers(), &push)
 }

@@ -1,15 +1,16 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
-//! gbuffer -> [primary_rays] -> shadows chain -> gi -> reflections -> [svgf chains: diffuse on
-//! gi, specular on reflections] -> composite -> [taa] -> tonemap -> history.
+//! gbuffer -> [primary_rays] -> shadows chain -> [radiance_cache] -> gi -> reflections -> [svgf
+//! chains: diffuse on gi, specular on reflections] -> composite -> [taa] -> tonemap -> history.
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
 
 use super::Settings;
 use super::plan::FramePlan;
 use crate::graph::{Output, Pass, Resource};
-use crate::passes::{self, PassBuilder, history, inject, svgf};
+use crate::passes::{self, PassBuilder, history, inject, radiance_cache, svgf};
 use anyhow::Result;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// The name of the test signal's SVGF chain when `Settings::test_signal` is on.
 pub const TEST_SIGNAL: &str = "signal";
@@ -22,6 +23,8 @@ pub struct HybridFrame {
     pub injected: HashMap<Output, inject::Texels>,
     /// The linear HDR result.
     pub hdr_output: Output,
+    /// The radiance cache, when a pass traces rays that end in it.
+    pub radiance_cache: Option<Arc<radiance_cache::Cache>>,
 }
 
 pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<HybridFrame> {
@@ -35,10 +38,23 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows)?;
     passes.extend(shadows.passes);
     kept.extend(shadows.kept);
+    // The cache answers where gi's and the reflections' rays end; with it off they trace on.
+    let cache = Arc::new(radiance_cache::Cache::new(b.ctx, &settings.radiance_cache, plan.scene_diagonal)?);
+    let cache_used = settings.radiance_cache.enabled && (plan.gi || plan.reflections);
+    if cache_used {
+        passes.push(Box::new(radiance_cache::new(b, &cache, settings.seed)?));
+    }
+    log::info!("{}", radiance_cache::describe(&settings.radiance_cache, cache_used, plan.scene_diagonal));
     // gi makes the diffuse signal and the rough surfaces' specular one; when the plan drops it
     // (smooth metals only), both are zero.
     let (gi_diffuse, gi_specular) = if plan.gi {
-        passes.push(Box::new(passes::gi::new(b, &settings.gi, settings.seed, settings.reflections.roughness_cutoff)?));
+        passes.push(Box::new(passes::gi::new(
+            b,
+            &settings.gi,
+            settings.seed,
+            settings.reflections.roughness_cutoff,
+            &cache,
+        )?));
         (passes::gi::RADIANCE.into(), passes::gi::SPECULAR.into())
     } else {
         let zero = crate::graph::zero(crate::gpu::vk::Format::R32G32B32A32_SFLOAT, false);
@@ -47,7 +63,14 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     // Without glossy surfaces, no reflection rays: gi's estimate of the rough lobes is the
     // specular signal.
     let mut specular: Resource = if plan.reflections {
-        passes.push(Box::new(passes::reflections::new(b, &settings.reflections, settings.seed, gi_specular)?));
+        passes.push(Box::new(passes::reflections::new(
+            b,
+            &settings.reflections,
+            settings.seed,
+            gi_specular,
+            &cache,
+            settings.gi.bounces,
+        )?));
         passes::reflections::RADIANCE.into()
     } else {
         gi_specular
@@ -78,5 +101,5 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     }
     passes.push(Box::new(passes::tonemap::new(b, hdr_output.into())?));
     passes.push(Box::new(history::new(kept)));
-    Ok(HybridFrame { passes, injected, hdr_output })
+    Ok(HybridFrame { passes, injected, hdr_output, radiance_cache: cache_used.then_some(cache) })
 }

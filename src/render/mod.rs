@@ -20,7 +20,7 @@ pub use scene_gpu::{FrameUniforms, SceneGpu};
 
 use crate::backend::Backend;
 use crate::gpu::{CommandPool, Context, Recorder, ShaderLibrary, vk};
-use crate::graph::{Graph, Output, Pass, PassTime, Resource};
+use crate::graph::{Graph, Output, PassTime, Resource};
 use crate::image_io::CpuImage;
 use crate::passes::{self, PassBuilder};
 use crate::scene::{Pose, Scene};
@@ -53,6 +53,8 @@ pub struct Settings {
     /// The denoiser's settings.
     pub denoise: crate::passes::svgf::SvgfSettings,
     pub gi: crate::passes::gi::GiSettings,
+    /// The radiance cache behind gi and reflections.
+    pub radiance_cache: crate::passes::radiance_cache::RadianceCacheSettings,
     pub reflections: crate::passes::reflections::ReflectionSettings,
     /// Mixed into the random streams of the stochastic passes.
     pub seed: u32,
@@ -96,6 +98,7 @@ impl Default for Settings {
             denoiser: true,
             denoise: Default::default(),
             gi: Default::default(),
+            radiance_cache: Default::default(),
             reflections: Default::default(),
             seed: 0,
             shadows: Default::default(),
@@ -139,6 +142,8 @@ pub struct Renderer {
     /// Images the CPU feeds into the frame (tests), by output name.
     injected: std::collections::HashMap<Output, passes::inject::Texels>,
     hdr_output: Output,
+    /// The radiance cache of the hybrid frame, for its statistics.
+    radiance_cache: Option<Arc<passes::radiance_cache::Cache>>,
     /// The next frame starts all temporal histories anew.
     cut_pending: bool,
     /// A camera set from outside (the viewer), in place of the scene's.
@@ -161,22 +166,18 @@ pub struct ViewOverride {
 }
 
 /// The passes of a frame for `settings`, the images the CPU feeds into it and its HDR output.
-type FrameParts = (Vec<Box<dyn Pass>>, std::collections::HashMap<Output, passes::inject::Texels>, Output);
-
-fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> Result<FrameParts> {
+fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> Result<frame::HybridFrame> {
     Ok(match settings.mode {
-        RenderMode::Hybrid => {
-            let f = frame::hybrid(b, settings, plan)?;
-            (f.passes, f.injected, f.hdr_output)
-        }
-        RenderMode::Reference { seed, max_bounces } => (
-            vec![
+        RenderMode::Hybrid => frame::hybrid(b, settings, plan)?,
+        RenderMode::Reference { seed, max_bounces } => frame::HybridFrame {
+            passes: vec![
                 Box::new(passes::pathtrace::new(b, seed, max_bounces)?),
                 Box::new(passes::tonemap::new(b, passes::pathtrace::COLOR.into())?),
             ],
-            Default::default(),
-            passes::pathtrace::COLOR,
-        ),
+            injected: Default::default(),
+            hdr_output: passes::pathtrace::COLOR,
+            radiance_cache: None,
+        },
     })
 }
 
@@ -194,7 +195,7 @@ impl Renderer {
         let (environment, lighting) = default_light::environment_data(&settings.environment, &scene)?;
         log::info!("lighting of {}: {}", scene.name, lighting.note);
         let plan = if settings.full {
-            plan::FramePlan::full()
+            plan::FramePlan::full(&scene)
         } else {
             plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff)
         };
@@ -214,9 +215,10 @@ impl Renderer {
         let pose = scene.evaluate(settings.start_time);
         let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment, settings.brdf)?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
-        let (frame_passes, injected, hdr_output) = frame_parts(&b, &settings, &plan)?;
+        let parts = frame_parts(&b, &settings, &plan)?;
         let extent = vk::Extent2D { width: settings.width, height: settings.height };
-        let graph = Graph::new(ctx, frame_passes, extent)?;
+        let graph = Graph::new(ctx, parts.passes, extent)?;
+        let (injected, hdr_output, radiance_cache) = (parts.injected, parts.hdr_output, parts.radiance_cache);
         Ok(Self {
             plan,
             lighting,
@@ -236,6 +238,7 @@ impl Renderer {
             ray_batch: None,
             injected,
             hdr_output,
+            radiance_cache,
             cut_pending: false,
             view_override: None,
             time_override: None,
@@ -258,11 +261,12 @@ impl Renderer {
             bail!("image size {}x{} is outside what the device supports (1..={limit} per side)", s.width, s.height);
         }
         let b = PassBuilder { ctx: &self.ctx, shaders, scene: &self.scene_gpu };
-        let (frame_passes, injected, hdr_output) = frame_parts(&b, s, &self.plan)?;
+        let parts = frame_parts(&b, s, &self.plan)?;
         let extent = vk::Extent2D { width: s.width, height: s.height };
-        self.graph = Graph::new(&self.ctx, frame_passes, extent)?;
-        self.injected = injected;
-        self.hdr_output = hdr_output;
+        self.graph = Graph::new(&self.ctx, parts.passes, extent)?;
+        self.injected = parts.injected;
+        self.hdr_output = parts.hdr_output;
+        self.radiance_cache = parts.radiance_cache;
         self.last_pass_times.clear();
         self.camera_cut();
         Ok(())
@@ -307,6 +311,13 @@ impl Renderer {
     /// The linear HDR image of the frame (before tonemapping).
     pub fn hdr_output(&self) -> Output {
         self.hdr_output
+    }
+
+    /// Live and updated cells of the radiance cache in the last rendered frame (None: the
+    /// frame has no cache).
+    pub fn radiance_cache_stats(&self) -> Option<passes::radiance_cache::CacheStats> {
+        let cache = self.radiance_cache.as_ref()?;
+        Some(cache.stats(self.frame_index.checked_sub(1)?))
     }
 
     /// The next frame is a camera cut: temporal passes drop their history.

@@ -21,18 +21,22 @@ pub struct FramePlan {
     pub gi: bool,
     /// Indices into the scene's lights that cannot reach any geometry.
     pub culled_lights: Vec<usize>,
+    /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
+    /// cells by it.
+    pub scene_diagonal: f32,
     /// One line per decision, saying why.
     pub reasons: Vec<String>,
 }
 
 impl FramePlan {
     /// Everything on (`--full`).
-    pub fn full() -> Self {
+    pub fn full(scene: &Scene) -> Self {
         Self {
             reflections: true,
             soft_shadows: true,
             gi: true,
             culled_lights: Vec::new(),
+            scene_diagonal: scene_diagonal(scene),
             reasons: vec!["--full: every pass runs".into()],
         }
     }
@@ -85,8 +89,14 @@ impl FramePlan {
         } else {
             "gi: skipped, every surface is a smooth metal (no diffuse lobe, no rough specular)".into()
         });
-        Self { reflections, soft_shadows, gi, culled_lights, reasons }
+        Self { reflections, soft_shadows, gi, culled_lights, scene_diagonal: scene_diagonal(scene), reasons }
     }
+}
+
+fn scene_diagonal(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.bounds(&scene.evaluate(0.0));
+    let d = (hi - lo).length();
+    if d.is_finite() { d } else { 1.0 }
 }
 
 fn list(names: &[&str]) -> String {

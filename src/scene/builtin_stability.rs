@@ -7,6 +7,7 @@
 //! | `stability-slide` | camera cut, fast pan, ghosting and disocclusion behind a moving cube |
 //! | `stability-lights` | lag after a light moves and after one switches off |
 //! | `stability-leak` | light leaking through a zero-thickness wall into a sealed room |
+//! | `stability-cache-leak` | light leaking through a wall thinner than a radiance-cache cell |
 //! | `stability-grazing` | shadow acne on a floor lit at a grazing angle, shadow terminator |
 //! | `stability-firefly` | fireflies from a tiny, very bright emitter |
 
@@ -16,8 +17,14 @@ use super::{Animation, Camera, Instance, Light, LightKind, Material, Node, Scene
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:` for the scenes of this file.
-pub const NAMES: &[&str] =
-    &["stability-slide", "stability-lights", "stability-leak", "stability-grazing", "stability-firefly"];
+pub const NAMES: &[&str] = &[
+    "stability-slide",
+    "stability-lights",
+    "stability-leak",
+    "stability-cache-leak",
+    "stability-grazing",
+    "stability-firefly",
+];
 
 /// The scene called `name`, if it is one of [`NAMES`].
 pub fn by_name(name: &str) -> Option<Scene> {
@@ -25,6 +32,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-slide" => Some(slide()),
         "stability-lights" => Some(lights()),
         "stability-leak" => Some(leak()),
+        "stability-cache-leak" => Some(cache_leak()),
         "stability-grazing" => Some(grazing()),
         "stability-firefly" => Some(firefly()),
         _ => None,
@@ -258,6 +266,57 @@ pub fn leak() -> Scene {
     s.cameras.push(camera("corner", 0.8, cams + 1));
     s.nodes.push(node("lamp", LIGHT));
     s.lights.push(light("lamp", LightKind::Point, 4.0, cams + 2));
+    s
+}
+
+/// Facts about `cache_leak`.
+pub mod cache_leak_facts {
+    use glam::Vec3;
+    /// The floor runs under the dividing wall at x = WALL_X, which is off the radiance cache's
+    /// cell grid (multiples of the cell size from the origin), so floor cells straddle it.
+    pub const WALL_X: f32 = 0.05;
+    /// Instances: the lit room's floor, the dark room's floor, then the walls.
+    pub const LIT_FLOOR_INSTANCE: u32 = 0;
+    pub const DARK_FLOOR_INSTANCE: u32 = 1;
+    /// The point light in the lit room (x < WALL_X), below the outer walls' tops (y = 1).
+    pub const LIGHT: Vec3 = Vec3::new(-1.0, 0.4, 0.0);
+}
+
+/// Two rooms without a ceiling, [-2, 2] x [0, 1] x [-1, 1], on one floor, split by a
+/// zero-thickness wall 1.5 high at x = WALL_X (higher than the outer walls, so no straight
+/// path joins a surface of one room to a surface of the other); a point light in the -X room,
+/// a camera above both. The environment is black and nothing outside reflects: the true
+/// radiance of the +X room is exactly 0, while floor cells of the radiance cache (cells of
+/// about 0.12 here) straddle the wall.
+pub fn cache_leak() -> Scene {
+    use cache_leak_facts::*;
+    let mut s = Scene { name: "builtin:stability-cache-leak".into(), ..Default::default() };
+    s.materials.push(Material { double_sided: true, ..diffuse("wall", 0.8) });
+    let (y, z2) = (Vec3::Y, Vec3::Z * 2.0);
+    let lit_width = WALL_X + 2.0;
+    let dark_width = 2.0 - WALL_X;
+    add(
+        &mut s,
+        "lit floor",
+        quad(Vec3::new(WALL_X - lit_width / 2.0, 0.0, 0.0), z2, Vec3::X * lit_width, 0),
+        Vec3::ZERO,
+    );
+    add(
+        &mut s,
+        "dark floor",
+        quad(Vec3::new(WALL_X + dark_width / 2.0, 0.0, 0.0), z2, Vec3::X * dark_width, 0),
+        Vec3::ZERO,
+    );
+    add(&mut s, "-x wall", quad(Vec3::new(-2.0, 0.5, 0.0), z2, y, 0), Vec3::ZERO);
+    add(&mut s, "+x wall", quad(Vec3::new(2.0, 0.5, 0.0), y, z2, 0), Vec3::ZERO);
+    add(&mut s, "-z wall", quad(Vec3::new(0.0, 0.5, -1.0), Vec3::X * 4.0, y, 0), Vec3::ZERO);
+    add(&mut s, "+z wall", quad(Vec3::new(0.0, 0.5, 1.0), y, Vec3::X * 4.0, 0), Vec3::ZERO);
+    add(&mut s, "divider", quad(Vec3::new(WALL_X, 0.75, 0.0), z2, y * 1.5, 0), Vec3::ZERO);
+    let cam = s.nodes.len() as u32;
+    s.nodes.push(looking("above", Vec3::new(WALL_X, 4.5, 0.6), Vec3::new(WALL_X, 0.0, 0.0)));
+    s.cameras.push(camera("above", 0.9, cam));
+    s.nodes.push(node("lamp", LIGHT));
+    s.lights.push(light("lamp", LightKind::Point, 4.0, cam + 1));
     s
 }
 

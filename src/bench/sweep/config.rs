@@ -21,6 +21,9 @@ pub struct Config {
     /// Every pass (`--full`) instead of the frame plan.
     #[serde(default)]
     pub full: bool,
+    /// The radiance cache (sweeps cached before it existed had none).
+    #[serde(default)]
+    pub cache: bool,
 }
 
 impl Default for Config {
@@ -33,6 +36,7 @@ impl Default for Config {
             reflection_rays: s.reflections.rays,
             taa: true,
             full: false,
+            cache: s.radiance_cache.enabled,
         }
     }
 }
@@ -46,6 +50,9 @@ impl std::fmt::Display for Config {
         )?;
         if !self.taa {
             write!(f, "-t0")?;
+        }
+        if !self.cache {
+            write!(f, "-c0")?;
         }
         if self.full {
             write!(f, "-f1")?;
@@ -75,6 +82,13 @@ impl std::str::FromStr for Config {
                     c.taa = n == 1;
                     continue;
                 }
+                "c" => {
+                    if n > 1 {
+                        bail!("configuration '{s}': c takes 0 (radiance cache off) or 1 (on)");
+                    }
+                    c.cache = n == 1;
+                    continue;
+                }
                 "f" => {
                     if n > 1 {
                         bail!("configuration '{s}': f takes 0 (frame plan) or 1 (every pass)");
@@ -84,7 +98,7 @@ impl std::str::FromStr for Config {
                 }
                 _ => bail!(
                     "configuration '{s}': unknown setting '{key}' (d: denoiser iterations, s: shadow s_max, \
-                     b: GI bounces, r: reflection rays, t: TAA 0/1, f: every pass 0/1)"
+                     b: GI bounces, r: reflection rays, t: TAA 0/1, c: radiance cache 0/1, f: every pass 0/1)"
                 ),
             };
             if !range.contains(&n) {
@@ -108,12 +122,14 @@ impl Config {
         s.reflections.rays = self.reflection_rays;
         s.taa = self.taa;
         s.full = self.full;
+        s.radiance_cache.enabled = self.cache;
     }
 }
 
 /// The default configurations: each axis moved away from the renderer's defaults (d4-s5-b1-r1)
 /// on its own, once with the denoiser on and once with it off, plus the cheapest and the most
-/// expensive corners. 15 configurations take ~5 minutes at 320x180 on a 2-core lavapipe;
+/// expensive corners, and the frame without the radiance cache: with one bounce, and as a
+/// 1-spp path tracer. The first 15 took ~5 minutes at 320x180 on a 2-core lavapipe;
 /// the full grid (5 x 3 x 2 x 2 x 2 = 120) would take hours and add few new front points.
 pub const DEFAULT_CONFIGS: &[&str] = &[
     "d0-s5-b1-r1-t0", // no temporal filtering at all: the raw one-sample frame
@@ -131,6 +147,9 @@ pub const DEFAULT_CONFIGS: &[&str] = &[
     "d0-s5-b1-r2",
     "d4-s5-b1-r2",
     "d4-s8-b2-r2",
+    "d0-s5-b1-r1-c0", // without the radiance cache: one bounce
+    "d4-s5-b1-r1-c0",
+    "d4-s5-b8-r1-c0", // a 1-spp path tracer (8 bounces, no cache) + SVGF + TAA
 ];
 
 pub fn default_configs() -> Vec<Config> {
@@ -149,7 +168,9 @@ mod tests {
         let c: Config = "d2".parse().unwrap();
         assert_eq!(c, Config { denoise_iterations: 2, ..Default::default() });
         assert_eq!("s8-t0".parse::<Config>().unwrap().to_string(), "d4-s8-b1-r1-t0");
-        for bad in ["x3", "d", "d-1", "s0", "d9", "t2", "", "d4s5"] {
+        assert_eq!("b8-c0".parse::<Config>().unwrap().to_string(), "d4-s5-b8-r1-c0");
+        assert!(!"c0".parse::<Config>().unwrap().cache && "c1".parse::<Config>().unwrap().cache);
+        for bad in ["x3", "d", "d-1", "s0", "d9", "t2", "c2", "", "d4s5"] {
             assert!(bad.parse::<Config>().is_err(), "{bad} should not parse");
         }
     }

@@ -30,7 +30,7 @@ mod report;
 
 pub use cache::{camera_key, lit_scene_key, pick_for_render, scene_hash, sweep_cache_path};
 pub use config::{Config, DEFAULT_CONFIGS, default_configs};
-pub use report::table;
+pub use report::{path_tracer_flip_at, table};
 
 use super::median;
 use super::target::{self, Measured};
@@ -65,6 +65,8 @@ pub struct Options {
     pub reference_spp: u32,
     /// Scattering events per reference path at most.
     pub reference_bounces: u32,
+    /// The path tracer's curve: 1, 2, 4, ... up to this many spp (0: none).
+    pub path_tracer_spp: u32,
     pub camera: CameraChoice,
     /// Where references and sweep results are cached (`out/cache` by default).
     pub cache_dir: PathBuf,
@@ -77,6 +79,8 @@ pub struct Options {
 
 /// Seeds of the reference's two halves (and nothing else uses them).
 const REFERENCE_SEEDS: [u32; 2] = [0x5eed_0001, 0x5eed_0002];
+/// Seed of the path tracer's curve: independent of the reference it is measured against.
+const PATH_TRACER_SEED: u32 = 0x5eed_0003;
 
 /// What the reference's sidecar records: what it was made from and by whom.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -149,6 +153,17 @@ impl Point {
     }
 }
 
+/// One point of the path tracer's curve: the mean of `spp` samples per pixel.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PathTracerPoint {
+    pub spp: u32,
+    /// `spp` times the median wall-clock time of one sample (frames 2.. of the run: the first
+    /// includes pipeline compilation), recording to fence like the configurations' frames.
+    pub ms: f64,
+    /// HDR-FLIP against the reference.
+    pub flip: f64,
+}
+
 /// The sweep of one scene at one size.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SceneSweep {
@@ -169,6 +184,10 @@ pub struct SceneSweep {
     pub rounds: u32,
     pub reference: ReferenceInfo,
     pub points: Vec<Point>,
+    /// The path tracer at 1, 2, 4, ... spp, on the same device, size and reference (empty in
+    /// sweeps cached before it was measured).
+    #[serde(default)]
+    pub path_tracer: Vec<PathTracerPoint>,
     /// Names of the configurations on the Pareto front, fastest first.
     pub pareto_front: Vec<String>,
     /// Wall-clock seconds of the whole sweep, reference included.
@@ -263,6 +282,48 @@ fn reference(
     image_io::write_exr(&exr, &img, image_io::channel_names(img.channels))?;
     image_io::write_atomic(&sidecar, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&made)?)?))?;
     Ok((img, info(false, made)))
+}
+
+/// The path tracer's curve: one progressive run of `opts.path_tracer_spp` samples, its error
+/// measured at each power of two against `reference`.
+fn path_tracer_curve(
+    ctx: &std::sync::Arc<Context>,
+    shaders: &ShaderLibrary,
+    scene: &Scene,
+    backend: Backend,
+    opts: &Options,
+    reference: &CpuImage,
+) -> Result<Vec<PathTracerPoint>> {
+    if opts.path_tracer_spp == 0 {
+        return Ok(Vec::new());
+    }
+    let settings = Settings {
+        width: opts.width,
+        height: opts.height,
+        mode: RenderMode::Reference { seed: PATH_TRACER_SEED, max_bounces: opts.reference_bounces },
+        environment: opts.environment.clone(),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
+    let bar = crate::progress::progress_bar(opts.path_tracer_spp as u64, "path tracer spp");
+    let (mut sample_ms, mut measured) = (Vec::new(), Vec::new());
+    for spp in 1..=opts.path_tracer_spp {
+        r.render_frame()?;
+        bar.inc(1);
+        if spp > 1 {
+            sample_ms.push(r.last_frame_wall_ms);
+        }
+        if spp.is_power_of_two() || spp == opts.path_tracer_spp {
+            let img = r.read_output(pathtrace::COLOR)?;
+            let flip = metrics::hdr_flip(reference, &img, &HdrFlipOptions::default())
+                .with_context(|| format!("path tracer at {spp} spp: FLIP"))?;
+            measured.push((spp, flip.mean));
+        }
+    }
+    bar.finish_and_clear();
+    // With one sample there is no warm frame to time: the first one stands in.
+    let per_sample = if sample_ms.is_empty() { r.last_frame_wall_ms } else { median(&sample_ms) };
+    Ok(measured.into_iter().map(|(spp, flip)| PathTracerPoint { spp, ms: spp as f64 * per_sample, flip }).collect())
 }
 
 /// What one run of a configuration timed, and its last frame.
@@ -382,6 +443,10 @@ pub fn sweep_scene(
         }
     }
     bar.finish_and_clear();
+    let path_tracer = path_tracer_curve(ctx, shaders, scene, backend, opts, &reference)?;
+    for p in &path_tracer {
+        log::info!("path tracer {} spp: {:.2} ms, FLIP {:.4}", p.spp, p.ms, p.flip);
+    }
     let measured: Vec<Measured> = points.iter().map(Point::measured).collect();
     let front = target::pareto_front(&measured);
     for &i in &front {
@@ -403,6 +468,7 @@ pub fn sweep_scene(
         reference: reference_info,
         pareto_front: front.iter().map(|&i| points[i].name.clone()).collect(),
         points,
+        path_tracer,
         seconds: start.elapsed().as_secs_f64(),
     };
     let cache = sweep_cache_path(

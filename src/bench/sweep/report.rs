@@ -2,6 +2,23 @@
 
 use super::{Config, Point, SceneSweep};
 
+/// The path tracer's HDR-FLIP after `ms` of rendering, interpolated on its curve (log-log,
+/// where error and time follow a power law); None outside the measured times.
+pub fn path_tracer_flip_at(s: &SceneSweep, ms: f64) -> Option<f64> {
+    let pts = &s.path_tracer;
+    let first = pts.first()?;
+    if ms < first.ms {
+        return None;
+    }
+    if ms == first.ms {
+        return Some(first.flip);
+    }
+    pts.windows(2).find(|w| w[0].ms <= ms && ms <= w[1].ms).map(|w| {
+        let t = (ms.ln() - w[0].ms.ln()) / (w[1].ms.ln() - w[0].ms.ln());
+        (w[0].flip.ln() + t * (w[1].flip.ln() - w[0].flip.ln())).exp()
+    })
+}
+
 /// A table of a sweep's points for the terminal; `*` marks the Pareto front.
 pub fn table(s: &SceneSweep) -> String {
     let mut t = format!(
@@ -17,23 +34,45 @@ pub fn table(s: &SceneSweep) -> String {
         s.reference.made.noise_flip
     );
     t += &format!(
-        "  {:<16} {:>9} {:>9} {:>8} {:>9} {:>7}\n",
-        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM"
+        "  {:<18} {:>9} {:>9} {:>8} {:>9} {:>7} {:>14}\n",
+        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM", "PT FLIP @time"
     );
     let mut order: Vec<&Point> = s.points.iter().collect();
     order.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     for p in order {
         let psnr = p.psnr_db.map_or("inf".to_string(), |v| format!("{v:.2}"));
+        let pt = path_tracer_flip_at(s, s.frames as f64 * p.frame_ms).map_or("-".to_string(), |f| format!("{f:.4}"));
         t += &format!(
-            "{} {:<16} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4}\n",
+            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4} {:>14}\n",
             if p.pareto { "*" } else { " " },
             p.name,
             p.frame_ms,
             p.timestamp_ms,
             p.flip,
             psnr,
-            p.ssim
+            p.ssim,
+            pt
         );
+    }
+    if !s.path_tracer.is_empty() {
+        t += &format!(
+            "  PT FLIP @time: the path tracer's error after the time {} frames of the configuration took \
+             (static camera; '-' beyond its curve)\n  path tracer (progressive, same reference):\n",
+            s.frames
+        );
+        for p in &s.path_tracer {
+            t += &format!("    {:>5} spp {:>10.2} ms  FLIP {:.4}\n", p.spp, p.ms, p.flip);
+        }
+        let default = Config::default();
+        if let (Some(one), Some(d)) = (s.path_tracer.first(), s.points.iter().find(|p| p.config == default)) {
+            t += &format!(
+                "  one frame of {} costs {:.2} ms, {:.2}x one path-traced sample per pixel ({:.2} ms)\n",
+                d.name,
+                d.frame_ms,
+                d.frame_ms / one.ms * one.spp as f64,
+                one.ms / one.spp as f64
+            );
+        }
     }
     for full in s.points.iter().filter(|p| p.config.full) {
         let planned = Config { full: false, ..full.config };

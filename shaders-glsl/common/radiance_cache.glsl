@@ -1,0 +1,260 @@
+// The radiance cache (src/passes/radiance_cache.rs): a world-space hash grid of cells that
+// persists across frames and holds each cell's indirect irradiance, so a GI or reflection ray
+// that ends on a surface can add the light that surface reflects from everything except the
+// lights (which a light sample covers exactly) without tracing the rest of the path.
+//
+// What a cell holds, C = (1/pi) int L_r cos over the hemisphere of the cell's normal, where L_r
+// is light *reflected* by other surfaces (their emission and the environment are left out:
+// next-event estimation at the querying point covers them). A surface with BRDF f seen from v
+// then reflects about C times its directional albedo: `rc_radiance_leaving` estimates that with
+// one BRDF sample's weight.
+//
+// A cell is keyed by its position quantised to a cell size that doubles with the distance from
+// the camera, and by the dominant axis and sign of the geometric normal (the two faces of a thin
+// wall never share a cell). A query of an absent cell claims a slot for it (compare-and-swap on
+// the key's checksum) and proposes its point and normal; the next update adopts the proposal
+// that wins an atomic minimum and traces from there as long as the cell lives. A query from a
+// point the adopted one cannot see (a floor cell that straddles a wall thinner than a cell) is
+// refused by a visibility ray, and the caller traces on instead: light does not leak through
+// walls.
+//
+// Determinism: the same frames give the same bits whatever the threads' order. Which query
+// claims a slot first only moves a key between slots (lookups follow the key, the update's
+// random stream follows the key); the adopted point is a minimum over all proposals; and the
+// update reads other cells from last frame's copy of the radiance (two copies, by frame parity)
+// while it writes this frame's.
+//
+// The includer defines RC_BINDING, the first of the three set-1 bindings the cache takes, and
+// includes trace.glsl, brdf.glsl, light_sampling.glsl and ray_offset.glsl first.
+#ifndef RADIANCE_CACHE_GLSL
+#define RADIANCE_CACHE_GLSL
+
+#extension GL_EXT_control_flow_attributes : require
+
+#ifndef RC_BINDING
+#error "RC_BINDING: define the first set-1 binding of the radiance cache before including it"
+#endif
+
+// Cells stay this many frames after the last query from the screen (gi, reflections); the
+// cache's own update queries do not keep them alive, or cells could keep each other alive.
+#define RC_LIFE 12.0
+// Linear probes after the home slot of a key.
+#define RC_PROBES 8u
+// A ray shorter than this many cells ends in a cell that may hold the ray's own origin (a
+// corner): the caller traces on instead.
+#define RC_MIN_CELLS 1.7320508
+// The visibility ray between a query and a cell's point runs this many cells above both
+// surfaces: a ray skimming a surface at a few ulps would often hit the surface itself.
+#define RC_LIFT_CELLS 0.1
+#define RC_EMPTY 0u
+// Vertices a path may trace where the cache cannot answer (corners, cells still empty).
+#define RC_VERTICES 3u
+
+struct RcCell {
+    vec4 radiance[2];  // by frame parity: rgb: C, a: samples in the running mean
+    vec4 point;        // xyz: where the update traces from, w: frames left to live
+    vec4 normal;       // xyz: geometric normal there, w: 1 once adopted
+    vec4 bounds;       // xyz: the cell's lowest corner, w: its size (for decoding proposals)
+    uvec4 proposal;    // x: ~(rank << 24 | position), y: ~(rank << 24 | normal); 0: none
+};
+
+// Written by the CPU when the cache is made (params), then counters of the update pass.
+struct RcState {
+    float cell;          // cell size at the camera
+    float lod_distance;  // the cell size doubles at each multiple of this distance
+    uint budget;         // cells updated per frame, at most
+    uint max_samples;    // the running mean's window
+    uint enabled;        // 0: every query misses (the frame traces as without a cache)
+    uint capacity;       // slots, a power of two
+    uint live[3];        // live cells counted by the update of frame f in live[f % 3]
+    uint updated[3];     // cells updated by the update of frame f in updated[f % 3]
+};
+
+layout(set = 1, binding = RC_BINDING, std430) coherent buffer RcKeys { uint rc_keys[]; };
+layout(set = 1, binding = RC_BINDING + 1, std430) coherent buffer RcCells { RcCell rc_cells[]; };
+layout(set = 1, binding = RC_BINDING + 2, std430) coherent buffer RcStateBuffer { RcState rc; };
+
+uint rc_hash(uint v) { return pcg_hash(v); }
+
+// Cell size at `p`: doubles with each multiple of lod_distance from the camera.
+float rc_cell_size(vec3 p) {
+    float level = floor(log2(1.0 + distance(p, frame.camera_pos) / rc.lod_distance));
+    return rc.cell * exp2(level);
+}
+
+// 0..5: the dominant axis of n and its sign.
+uint rc_normal_bucket(vec3 n) {
+    vec3 a = abs(n);
+    uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
+    return axis * 2u + (n[axis] < 0.0 ? 1u : 0u);
+}
+
+// Home slot and checksum (never RC_EMPTY) of the cell holding (p, n).
+uvec2 rc_key(vec3 p, vec3 n) {
+    float cell = rc_cell_size(p);
+    ivec3 c = ivec3(floor(p / cell));
+    uint h = rc_hash(floatBitsToUint(cell) ^ rc_normal_bucket(n));
+    h = rc_hash(h ^ uint(c.x));
+    h = rc_hash(h ^ uint(c.y));
+    h = rc_hash(h ^ uint(c.z));
+    uint check = rc_hash(h ^ 0x9e3779b9u) | 1u;
+    return uvec2(h & (rc.capacity - 1u), check);
+}
+
+#define RC_NONE 0xffffffffu
+
+// The slot of the cell holding (p, n), claiming an empty one when `claim`. RC_NONE when absent
+// (or the probes are full). A freed slot is all zeros (the update clears it), which is the
+// state a new cell starts in.
+uint rc_find(vec3 p, vec3 n, bool claim) {
+    uvec2 k = rc_key(p, n);
+    for (uint i = 0u; i < RC_PROBES; ++i) {
+        uint slot = (k.x + i) & (rc.capacity - 1u);
+        uint seen = rc_keys[slot];
+        if (seen == k.y) return slot;
+        if (seen != RC_EMPTY) continue;
+        if (!claim) return RC_NONE;
+        uint prev = atomicCompSwap(rc_keys[slot], RC_EMPTY, k.y);
+        if (prev == RC_EMPTY || prev == k.y) return slot;
+    }
+    return RC_NONE;
+}
+
+// 12 + 12 bits: the octahedral map of a unit vector.
+uint rc_pack_normal(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    uvec2 q = uvec2(clamp(e * 0.5 + 0.5, 0.0, 1.0) * 4095.0 + 0.5);
+    return q.x << 12 | q.y;
+}
+
+vec3 rc_unpack_normal(uint v) {
+    vec2 e = vec2(float(v >> 12 & 4095u), float(v & 4095u)) / 4095.0 * 2.0 - 1.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    return normalize(n);
+}
+
+// A query's proposal of its point (8 bits per axis within the cell) and normal for a cell that
+// has none yet. The rank, a hash of the quantised point, makes the winner a random one of the
+// proposals rather than the one nearest a corner, and the same one whatever the threads' order.
+void rc_propose(uint slot, vec3 p, vec3 n) {
+    float cell = rc_cell_size(p);
+    vec3 corner = floor(p / cell) * cell;
+    uvec3 q = uvec3(clamp((p - corner) / cell, 0.0, 1.0) * 255.0 + 0.5);
+    uint position = q.x << 16 | q.y << 8 | q.z;
+    uint rank = rc_hash(position) >> 24;
+    // Every query of this key writes the same corner and size.
+    rc_cells[slot].bounds = vec4(corner, cell);
+    atomicMax(rc_cells[slot].proposal.x, ~(rank << 24 | position));
+    atomicMax(rc_cells[slot].proposal.y, ~(rank << 24 | rc_pack_normal(n)));
+}
+
+// The radiance copy that queries read in frame `frame_index`: the update writes copy
+// frame_index & 1 and reads the other, which the last frame's update wrote.
+uint rc_copy_written(uint frame_index) { return frame_index & 1u; }
+
+// A cache answer that holds only if the cell's point sees the query: the visibility ray from
+// `from` along `dir` for `len` must miss.
+struct RcCandidate {
+    vec3 c;
+    vec3 from;
+    vec3 dir;
+    float len;
+};
+
+// The cache's C at surface point p (geometric normal n) reached by a ray of length t, from
+// radiance copy `copy`, when the cache may answer: the cell exists, has samples, and the ray is
+// long enough not to end in its own origin's cell. The answer holds if the cell's point sees p
+// (the caller traces `a`'s visibility ray). `from_screen`: a gi or reflection query, which
+// claims absent cells, proposes points and keeps cells alive.
+bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandidate a) {
+    a = RcCandidate(vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0);
+    if (rc.enabled == 0u || t < RC_MIN_CELLS * rc_cell_size(p)) return false;
+    uint slot = rc_find(p, n, from_screen);
+    if (slot == RC_NONE) return false;
+    if (from_screen) {
+        rc_cells[slot].point.w = RC_LIFE;
+        if (rc_cells[slot].normal.w == 0.0) rc_propose(slot, p, n);
+    }
+    if (rc_cells[slot].normal.w == 0.0) return false;
+    vec4 radiance = rc_cells[slot].radiance[copy];
+    if (radiance.a <= 0.0) return false;
+    float lift = RC_LIFT_CELLS * rc_cell_size(p);
+    a.from = p + n * lift;
+    vec3 d = rc_cells[slot].point.xyz + rc_cells[slot].normal.xyz * lift - a.from;
+    a.len = length(d);
+    a.dir = a.len > 1e-6 ? d / a.len : vec3(0.0, 0.0, 1.0);
+    a.c = radiance.rgb;
+    return true;
+}
+
+// Rays of a vertex in rc_radiance_leaving, in the order traced.
+#define RC_RAY_LIGHT 0u  // the light sample's shadow ray
+#define RC_RAY_CELL 1u   // the visibility ray between the vertex and its cache cell's point
+#define RC_RAY_NEXT 2u   // the BRDF-sampled ray to the next vertex
+
+// Light leaving surface s toward -dir, reached by a ray of length t, without s's own emission:
+// a light sample at each vertex, and for the rest the cache from vertex `first_cached` on (0:
+// s itself), tracing on by BRDF sampling where the cache cannot answer, `vertices` at most.
+// Queries count as from the screen when `from_screen` and read radiance copy `copy`.
+//
+// Every ray goes through one trace_ray call in the inner loop: lavapipe inlines a whole
+// traversal at each call site, and three sites made the shaders that use this take minutes to
+// compile.
+vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uint vertices, bool from_screen,
+                         uint copy, inout Rng rng) {
+    vec3 radiance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    for (uint vertex = 0u; vertex < vertices; ++vertex) {
+        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
+        vec3 v = -dir;
+        vec3 leave = offset_ray(s.position, s.normal_geo);
+        NeeSample ls = light_sample(leave, rng_next3(rng));
+        vec3 f = vec3(0.0);
+        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) f = brdf_eval_cos(m, s.normal, v, ls.dir);
+        BrdfSample bs = brdf_sample(m, s.normal, v, rng_next3(rng));
+        bool scatters = bs.pdf > 0.0 && dot(bs.l, s.normal_geo) > 0.0;
+        RcCandidate cached;
+        bool may_cache = scatters && vertex >= first_cached &&
+                         rc_lookup(s.position, s.normal_geo, t, from_screen, copy, cached);
+        bool answered = false;
+        Hit next;
+        next.instance = NO_HIT;
+        [[dont_unroll]] for (uint ray = RC_RAY_LIGHT; ray <= RC_RAY_NEXT; ++ray) {
+            vec3 o = leave, d = ls.dir;
+            float tmax = shadow_ray_tmax(ls.dist);
+            if (ray == RC_RAY_LIGHT) {
+                if (dot(f, f) <= 0.0) continue;
+            } else if (ray == RC_RAY_CELL) {
+                if (!may_cache) continue;
+                o = cached.from;
+                d = cached.dir;
+                tmax = cached.len;
+            } else {
+                if (answered || !scatters || vertex + 1u == vertices) break;
+                d = bs.l;
+                tmax = 1e6;
+            }
+            Hit h = trace_ray(o, d, 0.0, tmax, RAY_MASK_ALL, ray != RC_RAY_NEXT);
+            if (ray == RC_RAY_LIGHT && h.instance == NO_HIT) {
+                // No BRDF-sampled continuation counts emission: the light sample has full weight.
+                radiance += throughput * f * ls.weight;
+            } else if (ray == RC_RAY_CELL && h.instance == NO_HIT) {
+                // The BRDF sample's weight estimates the directional albedo that reflects C.
+                radiance += throughput * bs.weight * cached.c;
+                answered = true;
+            } else if (ray == RC_RAY_NEXT) {
+                next = h;
+            }
+        }
+        if (next.instance == NO_HIT) break;
+        throughput *= bs.weight;
+        dir = bs.l;
+        t = next.t;
+        s = hit_surface(next.instance, next.primitive, next.bary, dir);
+    }
+    return radiance;
+}
+
+#endif

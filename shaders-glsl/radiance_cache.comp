@@ -1,0 +1,116 @@
+#version 460
+// radiance_cache: keeps the world-space radiance cache (common/radiance_cache.glsl) and shows it.
+//
+// Mode 0, the update (one invocation per slot): a live cell loses a frame of life and dies at
+// zero; a new one adopts the queries' winning proposal of its point; then, chosen with odds
+// budget / (live cells last frame), it traces one cosine-weighted ray from its point and adds
+// what comes back (a light sample at the hit plus the cache there, or the path traced on where
+// the cache cannot answer) to its running mean, written to this frame's copy of the radiance.
+// Cells fed by cells carry every bounce; the mean's window (max_samples) bounds the lag.
+//
+// Mode 1, the view (one invocation per pixel): what the cache holds at each G-buffer surface,
+// for dumps and the viewer (radiance_cache.irradiance: rgb = C, a = samples).
+#extension GL_GOOGLE_include_directive : require
+#include "common/trace.glsl"
+#include "common/brdf.glsl"
+#include "common/light_sampling.glsl"
+#include "common/gbuffer.glsl"
+#include "common/ray_offset.glsl"
+#define RC_BINDING 4
+#include "common/radiance_cache.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal_geo;
+layout(set = 1, binding = 2, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 3, rgba32f) uniform writeonly image2D out_irradiance;
+
+layout(push_constant) uniform Params {
+    uint mode;  // 0: update, 1: view
+    uint seed;
+} params;
+
+#define SALT_RADIANCE_CACHE 0x72630000u
+
+void update(uint slot) {
+    uint f = frame.frame_index;
+    if (slot == 0u) {
+        // Nobody else touches the next frame's counters now.
+        rc.live[(f + 1u) % 3u] = 0u;
+        rc.updated[(f + 1u) % 3u] = 0u;
+    }
+    uint key = rc_keys[slot];
+    if (key == RC_EMPTY) return;
+    RcCell cell = rc_cells[slot];
+    uint write = rc_copy_written(f), read = write ^ 1u;
+    // A cell dies in two frames, so that other cells' updates, which may look it up while this
+    // one runs, see the same thing whichever runs first: first its copy of this frame goes
+    // empty (nobody uses an empty cell), then, unless a query revived it meanwhile, its slot is
+    // freed: back to all zeros, the state a new cell starts in.
+    if (cell.point.w <= 0.0) {
+        rc_cells[slot] = RcCell(vec4[2](vec4(0.0), vec4(0.0)), vec4(0.0), vec4(0.0), vec4(0.0), uvec4(0u));
+        rc_keys[slot] = RC_EMPTY;
+        return;
+    }
+    float life = cell.point.w - 1.0;
+    rc_cells[slot].point.w = life;
+    if (life <= 0.0) {
+        rc_cells[slot].radiance[write] = vec4(0.0);
+        return;
+    }
+    atomicAdd(rc.live[f % 3u], 1u);
+    vec4 mean = cell.radiance[read];
+    if (cell.normal.w == 0.0) {
+        // Adopt the winning proposal of the queries so far (none yet: wait for one).
+        if (cell.proposal.x == 0u) return;
+        uint position = ~cell.proposal.x & 0xffffffu;
+        vec3 local = vec3(float(position >> 16), float(position >> 8 & 255u), float(position & 255u)) / 255.0;
+        cell.point.xyz = cell.bounds.xyz + local * cell.bounds.w;
+        cell.normal = vec4(rc_unpack_normal(~cell.proposal.y & 0xffffffu), 1.0);
+        rc_cells[slot].point.xyz = cell.point.xyz;
+        rc_cells[slot].normal = cell.normal;
+    }
+    // The random stream follows the key, not the slot the key happened to land in.
+    Rng rng = rng_init(uvec2(key, 0x5a5au), f, params.seed ^ SALT_RADIANCE_CACHE);
+    uint live_before = max(rc.live[(f + 2u) % 3u], 1u);
+    if (rng_next(rng) * float(live_before) < float(rc.budget)) {
+        atomicAdd(rc.updated[f % 3u], 1u);
+        vec3 n = cell.normal.xyz;
+        vec3 origin = offset_ray(cell.point.xyz, n);
+        vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
+        vec3 estimate = vec3(0.0);
+        if (dot(dir, n) > 0.0) {
+            Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
+            if (h.instance != NO_HIT) {
+                HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+                // Cosine sampling: (1/pi) L cos / pdf is L.
+                estimate = rc_radiance_leaving(s, dir, h.t, 0u, RC_VERTICES, false, read, rng);
+            }
+        }
+        if (any(isnan(estimate)) || any(isinf(estimate))) estimate = vec3(0.0);
+        float samples = min(mean.a + 1.0, float(rc.max_samples));
+        mean = vec4(mix(mean.rgb, estimate, 1.0 / samples), samples);
+    }
+    rc_cells[slot].radiance[write] = mean;
+}
+
+void view(ivec2 px) {
+    if (imageLoad(g_ids, px).x == NO_INSTANCE) {
+        imageStore(out_irradiance, px, vec4(0.0));
+        return;
+    }
+    vec3 p = world_position(px, imageLoad(g_depth, px).r);
+    uint slot = rc_find(p, imageLoad(g_normal_geo, px).xyz, false);
+    imageStore(out_irradiance, px, slot == RC_NONE ? vec4(0.0) : rc_cells[slot].radiance[rc_copy_written(frame.frame_index)]);
+}
+
+void main() {
+    if (params.mode == 0u) {
+        uint slot = gl_WorkGroupID.x * 64u + gl_LocalInvocationIndex;
+        if (slot < rc.capacity) update(slot);
+    } else {
+        ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+        if (all(lessThan(px, ivec2(frame.size)))) view(px);
+    }
+}
