@@ -107,13 +107,13 @@ fn edited_added_and_removed_files_are_named_as_stale() {
     assert!(stale().is_empty());
 
     // A new traced module: its file and both variants' missing SPIR-V.
-    std::fs::write(glsl.join("radiance_cache.comp"), "#version 460\n#include \"common/trace.glsl\"\nvoid main() {}\n")
+    std::fs::write(glsl.join("example_new_pass.comp"), "#version 460\n#include \"common/trace.glsl\"\nvoid main() {}\n")
         .unwrap();
     let s = stale();
-    assert!(s.iter().any(|l| l.contains("radiance_cache.comp: new")), "{s:?}");
-    assert!(s.iter().any(|l| l.contains("radiance_cache.comp:rayquery has no SPIR-V")), "{s:?}");
-    assert!(s.iter().any(|l| l.contains("radiance_cache.comp:compute has no SPIR-V")), "{s:?}");
-    std::fs::remove_file(glsl.join("radiance_cache.comp")).unwrap();
+    assert!(s.iter().any(|l| l.contains("example_new_pass.comp: new")), "{s:?}");
+    assert!(s.iter().any(|l| l.contains("example_new_pass.comp:rayquery has no SPIR-V")), "{s:?}");
+    assert!(s.iter().any(|l| l.contains("example_new_pass.comp:compute has no SPIR-V")), "{s:?}");
+    std::fs::remove_file(glsl.join("example_new_pass.comp")).unwrap();
 
     // A removed module, and a SPIR-V file that differs from the manifest.
     std::fs::rename(glsl.join("taa.comp"), dir.join("taa.comp")).unwrap();
