@@ -107,8 +107,11 @@ fn edited_added_and_removed_files_are_named_as_stale() {
     assert!(stale().is_empty());
 
     // A new traced module: its file and both variants' missing SPIR-V.
-    std::fs::write(glsl.join("example_new_pass.comp"), "#version 460\n#include \"common/trace.glsl\"\nvoid main() {}\n")
-        .unwrap();
+    std::fs::write(
+        glsl.join("example_new_pass.comp"),
+        "#version 460\n#include \"common/trace.glsl\"\nvoid main() {}\n",
+    )
+    .unwrap();
     let s = stale();
     assert!(s.iter().any(|l| l.contains("example_new_pass.comp: new")), "{s:?}");
     assert!(s.iter().any(|l| l.contains("example_new_pass.comp:rayquery has no SPIR-V")), "{s:?}");
