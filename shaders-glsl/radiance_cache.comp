@@ -66,8 +66,11 @@ void update(uint slot) {
         if (cell.proposal.x == 0u) return;
         uint position = ~cell.proposal.x & 0xffffffu;
         vec3 local = vec3(float(position >> 16), float(position >> 8 & 255u), float(position & 255u)) / 255.0;
+        // Lifted off the surface by more than the quantisation's error (at most sqrt(3)/510 of
+        // a cell): a point a hair behind its surface would trace every ray into the back of it.
         cell.point.xyz = cell.bounds.xyz + local * cell.bounds.w;
         cell.normal = vec4(rc_unpack_normal(~cell.proposal.y & 0xffffffu), 1.0);
+        cell.point.xyz += cell.normal.xyz * (cell.bounds.w * RC_POINT_LIFT);
         rc_cells[slot].point.xyz = cell.point.xyz;
         rc_cells[slot].normal = cell.normal;
     }

@@ -46,6 +46,8 @@
 // The visibility ray between a query and a cell's point runs this many cells above both
 // surfaces: a ray skimming a surface at a few ulps would often hit the surface itself.
 #define RC_LIFT_CELLS 0.1
+// An adopted point is lifted this many cells along its normal (see the update).
+#define RC_POINT_LIFT (1.0 / 128.0)
 #define RC_EMPTY 0u
 // Vertices a path may trace where the cache cannot answer (corners, cells still empty).
 #define RC_VERTICES 3u
