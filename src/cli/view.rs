@@ -3,7 +3,7 @@
 use super::{EnvironmentArgs, GpuArgs, SceneArgs, parse_size};
 use crate::app::{self, ViewOptions, script};
 use crate::gpu::ShaderLibrary;
-use crate::render::{self, CameraChoice, Settings};
+use crate::render::{CameraChoice, Settings};
 use anyhow::{Context as _, Result, bail};
 use clap::Args;
 use std::path::PathBuf;
