@@ -187,7 +187,7 @@ fn runtime_shader_errors_name_file_and_line() {
     let dir = common::temp_dir("shaders");
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl");
     let copy = dir.join("shaders-glsl");
-    copy_dir(&src, &copy);
+    common::copy_dir(&src, &copy);
     // The unchanged copy compiles and renders.
     let ok = hybrid_rt(
         &[
@@ -239,17 +239,4 @@ fn without_the_shader_compiler_shader_dir_says_how_to_rebuild() {
     let msg = text(&r);
     assert!(!r.status.success() && msg.contains("--features shader-compiler"), "{msg}");
     assert!(!msg.contains("panicked") && !out.exists(), "{msg}");
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let p = e.unwrap().path();
-        let dest = to.join(p.file_name().unwrap());
-        if p.is_dir() {
-            copy_dir(&p, &dest);
-        } else {
-            std::fs::copy(&p, &dest).unwrap();
-        }
-    }
 }

@@ -146,7 +146,7 @@ fn out_of_device_memory_names_the_allocation_and_suggests_a_smaller_size() {
 fn a_shader_broken_at_hot_reload_keeps_the_old_module() {
     let dir = common::temp_dir("reload");
     let copy = dir.join("shaders-glsl");
-    copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl"), &copy);
+    common::copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders-glsl"), &copy);
     let mut lib = ShaderLibrary::from_dir(&copy).expect("the shipped shaders compile");
     let before = lib.get("tonemap.comp").unwrap();
 
@@ -172,17 +172,4 @@ fn a_shader_broken_at_hot_reload_keeps_the_old_module() {
     std::fs::write(&path, good).unwrap();
     lib.recompile().expect("the repaired shader compiles");
     assert_eq!(lib.get("tonemap.comp").unwrap(), before);
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let p = e.unwrap().path();
-        let dest = to.join(p.file_name().unwrap());
-        if p.is_dir() {
-            copy_dir(&p, &dest);
-        } else {
-            std::fs::copy(&p, &dest).unwrap();
-        }
-    }
 }
