@@ -6,7 +6,8 @@
 // budget / (live cells last frame), it traces one cosine-weighted ray from its point and adds
 // what comes back (a light sample at the hit plus the cache there, or the path traced on where
 // the cache cannot answer) to its running mean, written to this frame's copy of the radiance.
-// Cells fed by cells carry every bounce; the mean's window (max_samples) bounds the lag.
+// Cells fed by cells carry every bounce; the mean's window (max_samples) bounds the lag, and a
+// frame whose lights changed (FRAME_LIGHTS_CHANGED) starts every mean anew.
 //
 // Mode 1, the view (one invocation per pixel): what the cache holds at each G-buffer surface,
 // for dumps and the viewer (radiance_cache.irradiance: rgb = C, a = samples).
@@ -74,6 +75,12 @@ void update(uint slot) {
         rc_cells[slot].point.xyz = cell.point.xyz;
         rc_cells[slot].normal = cell.normal;
     }
+    // The lights changed since last frame: every cell's mean, and last frame's copy that the
+    // estimate would read deeper cells from, hold the old light. The mean starts anew and the
+    // estimate traces its path on without the cache; a cell not updated this frame is empty
+    // until it is (queries of it trace on meanwhile).
+    bool relit = (frame.flags & FRAME_LIGHTS_CHANGED) != 0u;
+    if (relit) mean = vec4(0.0);
     // The random stream follows the key, not the slot the key happened to land in.
     Rng rng = rng_init(uvec2(key, 0x5a5au), f, params.seed ^ SALT_RADIANCE_CACHE);
     uint live_before = max(rc.live[(f + 2u) % 3u], 1u);
@@ -88,7 +95,8 @@ void update(uint slot) {
             if (h.instance != NO_HIT) {
                 HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
                 // Cosine sampling: (1/pi) L cos / pdf is L.
-                estimate = rc_radiance_leaving(s, dir, h.t, 0u, RC_VERTICES, false, read, rng);
+                uint vertices = relit ? RC_VERTICES_RELIT : RC_VERTICES;
+                estimate = rc_radiance_leaving(s, dir, h.t, relit ? vertices : 0u, vertices, false, read, rng);
             }
         }
         if (any(isnan(estimate)) || any(isinf(estimate))) estimate = vec3(0.0);

@@ -94,7 +94,9 @@ void main() {
     vec3 hist_c = vec3(0.0);
     vec2 hist_m = vec2(0.0);
     float hist_len = 0.0, wsum = 0.0;
-    bool reset = (frame.flags & FRAME_RESET_HISTORY) != 0u;
+    // A camera cut, or lights that changed since last frame: the history holds light that is
+    // gone (the lag a lit history would add is the whole accumulation window).
+    bool reset = (frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u;
     for (int i = 0; i < 4 && !reset; ++i) {
         ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
         if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;

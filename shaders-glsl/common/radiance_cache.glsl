@@ -51,6 +51,10 @@
 #define RC_EMPTY 0u
 // Vertices a path may trace where the cache cannot answer (corners, cells still empty).
 #define RC_VERTICES 3u
+// Vertices the update traces in a frame whose lights changed, when no cell holds the new light
+// yet: deep enough that the first frame misses little of the bounce light that later frames
+// build up by cells feeding cells.
+#define RC_VERTICES_RELIT 6u
 
 struct RcCell {
     vec4 radiance[2];  // by frame parity: rgb: C, a: samples in the running mean

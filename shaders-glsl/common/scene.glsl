@@ -99,6 +99,8 @@ layout(set = 0, binding = 0, scalar) uniform FrameUniforms {
 
 // Set on the first frame and after a camera cut: temporal passes start their history anew.
 #define FRAME_RESET_HISTORY 1u
+// Set when the lights differ from last frame's: the radiance cache starts its light anew.
+#define FRAME_LIGHTS_CHANGED 2u
 
 layout(set = 0, binding = 1, scalar) readonly buffer Vertices { Vertex vertices[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Indices { uint indices[]; };

@@ -147,12 +147,13 @@ impl LightTables {
         set.write_buffer(binding::ENV_CDF, BindingKind::StorageBuffer, &self.env_cdf);
     }
 
-    /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build.
-    pub fn update(&mut self, scene: &Scene, pose: &Pose) -> Result<()> {
+    /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build;
+    /// true when it did (the first call always does).
+    pub fn update(&mut self, scene: &Scene, pose: &Pose) -> Result<bool> {
         let now: Vec<Mat4> =
             self.emissive.iter().map(|&i| pose.world[scene.instances[i as usize].node as usize]).collect();
         if self.built_for.as_ref() == Some(&now) {
-            return Ok(());
+            return Ok(false);
         }
         let emitters = emitters(scene, pose);
         let mut powers: Vec<(u32, u32, f32)> = Vec::with_capacity(self.punctual_powers.len() + emitters.len() + 1);
@@ -174,7 +175,7 @@ impl LightTables {
         self.table.write(size_of::<GpuLightTableHeader>(), bytemuck::cast_slice(&entries))?;
         self.emitters.write(0, bytemuck::cast_slice(&emitters))?;
         self.built_for = Some(now);
-        Ok(())
+        Ok(true)
     }
 }
 

@@ -408,7 +408,8 @@ impl Renderer {
             exposure: self.settings.exposure,
             sky_color: self.scene_gpu.light_tables.sky.to_array(),
             instance_count: self.scene.instances.len() as u32,
-            flags: if reset { scene_gpu::FRAME_RESET_HISTORY } else { 0 },
+            flags: if reset { scene_gpu::FRAME_RESET_HISTORY } else { 0 }
+                | if self.scene_gpu.lights_changed { scene_gpu::FRAME_LIGHTS_CHANGED } else { 0 },
         }
     }
 

@@ -128,6 +128,10 @@ pub struct FrameUniforms {
 
 /// `FrameUniforms::flags`: the first frame, or a camera cut: no temporal history is valid.
 pub const FRAME_RESET_HISTORY: u32 = 1;
+/// Set when the light differs from last frame's (a punctual light moved, dimmed or went off,
+/// an emitter moved): what remembers light rather than geometry (the radiance cache) starts
+/// anew. Mirrors FRAME_LIGHTS_CHANGED in common/scene.glsl.
+pub const FRAME_LIGHTS_CHANGED: u32 = 2;
 
 pub struct SceneGpu {
     pub vertices: Buffer,
@@ -148,6 +152,10 @@ pub struct SceneGpu {
     pub light_tables: LightTables,
     _brdf_data: Buffer,
     prev_world: Option<Vec<Mat4>>,
+    /// The punctual lights as last written, to tell whether this frame's differ.
+    prev_lights: Option<Vec<GpuLight>>,
+    /// Whether the lights written by the last `update_pose` differ from the frame's before.
+    pub lights_changed: bool,
     deformer: Option<super::deform::Deformer>,
 }
 
@@ -271,6 +279,8 @@ impl SceneGpu {
             light_tables,
             _brdf_data: brdf_data,
             prev_world: None,
+            prev_lights: None,
+            lights_changed: true,
             deformer,
         };
         gpu.update_pose(scene, pose)?;
@@ -301,13 +311,18 @@ impl SceneGpu {
         self.instances.write(0, bytemuck::cast_slice(&instances))?;
         let lights: Vec<GpuLight> = scene.lights.iter().map(|l| gpu_light(l, &pose.world[l.node as usize])).collect();
         self.lights.write(0, bytemuck::cast_slice(&lights))?;
+        let punctual_changed = self.prev_lights.as_ref().is_none_or(|prev| {
+            bytemuck::cast_slice::<GpuLight, u8>(prev) != bytemuck::cast_slice::<GpuLight, u8>(&lights)
+        });
+        self.prev_lights = Some(lights);
         if let Some(deformer) = &mut self.deformer {
             let changed = deformer.update(scene, pose)?;
             let meshes: Vec<(u32, &[Vec3])> = changed.iter().map(|(m, p)| (*m, p.as_slice())).collect();
             self.accel.update_geometry(scene, pose, &meshes)?;
         }
         self.accel.update_instances(scene, pose)?;
-        self.light_tables.update(scene, pose)?;
+        let emitters_moved = self.light_tables.update(scene, pose)?;
+        self.lights_changed = punctual_changed || emitters_moved;
         self.prev_world = Some(pose.world.clone());
         Ok(())
     }
