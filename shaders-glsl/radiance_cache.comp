@@ -95,8 +95,12 @@ void update(uint slot) {
             if (h.instance != NO_HIT) {
                 HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
                 // Cosine sampling: (1/pi) L cos / pdf is L.
-                uint vertices = relit ? RC_VERTICES_RELIT : RC_VERTICES;
-                estimate = rc_radiance_leaving(s, dir, h.t, relit ? vertices : 0u, vertices, false, read, rng);
+                // A young cell (or any, right after the lights changed) traces its path deep
+                // without the cache: the cells it would read are young too, and their truncated
+                // light would stay in its mean for the whole window.
+                bool deep = relit || mean.a < RC_YOUNG_SAMPLES;
+                uint vertices = deep ? RC_VERTICES_DEEP : RC_VERTICES;
+                estimate = rc_radiance_leaving(s, dir, h.t, deep ? vertices : 0u, vertices, false, read, rng);
             }
         }
         if (any(isnan(estimate)) || any(isinf(estimate))) estimate = vec3(0.0);

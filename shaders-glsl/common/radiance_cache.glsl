@@ -51,10 +51,12 @@
 #define RC_EMPTY 0u
 // Vertices a path may trace where the cache cannot answer (corners, cells still empty).
 #define RC_VERTICES 3u
-// Vertices the update traces in a frame whose lights changed, when no cell holds the new light
-// yet: deep enough that the first frame misses little of the bounce light that later frames
-// build up by cells feeding cells.
-#define RC_VERTICES_RELIT 6u
+// Vertices the update traces without the cache while no cell holds much light yet (a young
+// cell, or every cell in a frame whose lights changed): deep enough that these first samples
+// miss little of the bounce light that cells feeding cells carry later.
+#define RC_VERTICES_DEEP 6u
+// A cell is young until its mean holds this many samples.
+#define RC_YOUNG_SAMPLES 4.0
 
 struct RcCell {
     vec4 radiance[2];  // by frame parity: rgb: C, a: samples in the running mean
