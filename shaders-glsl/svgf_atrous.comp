@@ -3,7 +3,8 @@
 // kernel with holes (step 2^i), weighted by depth (scaled by the surface's depth slope), shading
 // normal (power sigma_n; see svgf_weight_normal) and luminance (scaled by the 3x3-prefiltered standard deviation). Colour is
 // filtered with the weights, variance with their squares, so the next iteration stops at the
-// right edges.
+// right edges. Every neighbour's weight is scaled by the pixel's footprint (the colour's alpha,
+// from svgf_temporal: narrow for a sharp reflection).
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
@@ -55,6 +56,8 @@ void main() {
     vec3 n = imageLoad(g_normal, px).xyz;
     float l = luminance(c_p.rgb);
     float std_dev = sqrt(max(0.0, prefiltered_variance(px)));
+    // The temporal stage's footprint (alpha): 0 for a mirror's reflection, which stays sharp.
+    float footprint = c_p.a;
     vec3 sum_c = c_p.rgb;
     float sum_v = var_p;
     float wsum = 1.0;
@@ -66,7 +69,7 @@ void main() {
             if (!inside(q) || imageLoad(g_ids, q).x == NO_INSTANCE) continue;
             vec3 c_q = imageLoad(in_color, q).rgb;
             float k = B3[abs(dx)] * B3[abs(dy)] / (B3[0] * B3[0]);
-            float w = k * svgf_weight_depth(z, imageLoad(g_depth, q).r, zf.y, length(vec2(off))) *
+            float w = footprint * k * svgf_weight_depth(z, imageLoad(g_depth, q).r, zf.y, length(vec2(off))) *
                       svgf_weight_normal(n, imageLoad(g_normal, q).xyz) *
                       svgf_weight_luminance(l, luminance(c_q), std_dev);
             sum_c += w * c_q;

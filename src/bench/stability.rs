@@ -19,7 +19,7 @@ use crate::passes::shadows::HARD_VISIBILITY;
 use crate::render::{CameraChoice, Renderer, Settings, ViewOverride};
 use crate::scene::Scene;
 use crate::scene::builtin_stability::{
-    self as scenes, cache_leak_facts, grazing_facts, leak_facts, lights_facts, slide_facts,
+    self as scenes, cache_leak_facts, grazing_facts, leak_facts, lights_facts, mirror_facts, slide_facts,
 };
 use anyhow::{Context as _, Result};
 use glam::{Vec2, Vec3};
@@ -94,6 +94,7 @@ pub type ScenarioFn = fn(&Rig, bool) -> Result<Vec<Measure>>;
 pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
     ("camera cut", camera_cut),
     ("fast pan", fast_pan),
+    ("mirror pan", mirror_pan),
     ("moving object", moving_object),
     ("moving light", moving_light),
     ("light off", light_off),
@@ -292,6 +293,31 @@ pub fn fast_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     }
     let mean = errors.iter().sum::<f64>() / errors.len() as f64;
     Ok(vec![measure("during the pan: rel. error", "fraction", mean, if denoised { 0.27 } else { 0.25 })])
+}
+
+/// **Mirror pan** in `stability-mirror`: the `truck` camera holds still for `WARM_UP` frames,
+/// then moves sideways over the near-mirror floor for 18 frames. Metric: the relative mean
+/// absolute luminance error over the floor's pixels (what it reflects), halfway through and at
+/// the end, against the mean of 8 raw frames at the same pose: history fetched where the floor
+/// was, not where the reflected wall was, smears the reflection.
+pub fn mirror_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use mirror_facts::*;
+    let start = TRUCK_START - WARM_UP as f32 * FRAME_DT;
+    let truck_frames = ((TRUCK_END - TRUCK_START) / FRAME_DT).round() as u32;
+    let mut r = renderer(rig, scenes::mirror(), denoised, start, 0)?;
+    let mut reference = renderer(rig, scenes::mirror(), false, start, 0)?;
+    let mut errors = Vec::new();
+    for frame in 0..WARM_UP + truck_frames {
+        let l = next_luminance(&mut r)?;
+        if frame == WARM_UP + truck_frames / 2 || frame == WARM_UP + truck_frames - 1 {
+            reference.set_time(Some(r.time_of(frame)));
+            let truth = mean_of_frames(&mut reference, 8)?;
+            let floor = ids(&reference.read_output(gbuffer::IDS)?);
+            errors.push(relative_error(&l, &truth, |i| floor[i] == FLOOR_INSTANCE));
+        }
+    }
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    Ok(vec![measure("during the pan: floor rel. error", "fraction", mean, if denoised { 0.35 } else { 0.15 })])
 }
 
 /// **Moving object** in `stability-slide`: a dark cube slides across the sunlit checkerboard

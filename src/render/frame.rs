@@ -77,8 +77,12 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     };
     let mut diffuse = gi_diffuse;
     if settings.denoiser {
-        for (signal, input) in [("diffuse", &mut diffuse), ("specular", &mut specular)] {
-            let chain = svgf::chain(b, signal, *input, &settings.denoise)?;
+        // The specular signal of reflection rays follows what they hit when the camera moves.
+        let hit_distance = plan.reflections.then_some(passes::reflections::HIT_DISTANCE.into());
+        for (signal, input, hit_distance) in
+            [("diffuse", &mut diffuse, None), ("specular", &mut specular, hit_distance)]
+        {
+            let chain = svgf::chain(b, signal, *input, hit_distance, &settings.denoise)?;
             passes.extend(chain.passes);
             kept.extend(chain.kept);
             *input = chain.output.into();
@@ -87,7 +91,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     if settings.test_signal {
         let (pass, texels) = inject::new(b.ctx, TEST_INPUT, extent)?;
         passes.push(Box::new(pass));
-        let chain = svgf::chain(b, TEST_SIGNAL, TEST_INPUT.into(), &settings.denoise)?;
+        let chain = svgf::chain(b, TEST_SIGNAL, TEST_INPUT.into(), None, &settings.denoise)?;
         passes.extend(chain.passes);
         kept.extend(chain.kept);
         injected.insert(TEST_INPUT, texels);

@@ -10,6 +10,7 @@
 //! | `stability-cache-leak` | light leaking through a wall thinner than a radiance-cache cell |
 //! | `stability-grazing` | shadow acne on a floor lit at a grazing angle, shadow terminator |
 //! | `stability-firefly` | fireflies from a tiny, very bright emitter |
+//! | `stability-mirror` | a mirror's reflection while the camera moves sideways over it |
 
 use super::animation::{Channel, Interpolation, Property};
 use super::builtin::{cuboid, node, quad, uv_sphere};
@@ -24,6 +25,7 @@ pub const NAMES: &[&str] = &[
     "stability-cache-leak",
     "stability-grazing",
     "stability-firefly",
+    "stability-mirror",
 ];
 
 /// The scene called `name`, if it is one of [`NAMES`].
@@ -35,6 +37,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-cache-leak" => Some(cache_leak()),
         "stability-grazing" => Some(grazing()),
         "stability-firefly" => Some(firefly()),
+        "stability-mirror" => Some(mirror()),
         _ => None,
     }
 }
@@ -76,6 +79,32 @@ fn add(s: &mut Scene, name: &str, mesh: super::Mesh, at: Vec3) -> u32 {
     s.instances.len() as u32 - 1
 }
 
+/// Adds a checkerboard texture of 8x8 squares, sRGB 230 and 110 (linear albedo 0.79 and 0.16),
+/// sampled nearest; returns its texture index.
+fn add_checker(s: &mut Scene) -> u32 {
+    let size = 32u32;
+    let cell = size / 8;
+    let mut rgba = Vec::with_capacity((size * size * 4) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            let v = if (x / cell + y / cell).is_multiple_of(2) { 230 } else { 110 };
+            rgba.extend_from_slice(&[v, v, v, 255]);
+        }
+    }
+    s.images.push(super::Image { name: "checker".into(), width: size, height: size, rgba8: rgba });
+    s.textures.push(super::Texture {
+        image: Some(s.images.len() as u32 - 1),
+        sampler: super::Sampler {
+            mag_filter: super::Filter::Nearest,
+            min_filter: super::Filter::Nearest,
+            mipmaps: false,
+            wrap_s: super::Wrap::Repeat,
+            wrap_t: super::Wrap::Repeat,
+        },
+    });
+    s.textures.len() as u32 - 1
+}
+
 /// Facts about `slide` that the suite checks against.
 pub mod slide_facts {
     /// The sliding cube's instance (after the wall's and the floor's).
@@ -104,30 +133,13 @@ pub mod slide_facts {
 pub fn slide() -> Scene {
     use slide_facts::*;
     let mut s = Scene { name: "builtin:stability-slide".into(), ..Default::default() };
-    let size = 32u32;
-    let cell = size / 8;
-    let mut rgba = Vec::with_capacity((size * size * 4) as usize);
-    for y in 0..size {
-        for x in 0..size {
-            // sRGB 230 and 110: linear albedo 0.79 and 0.16.
-            let v = if (x / cell + y / cell).is_multiple_of(2) { 230 } else { 110 };
-            rgba.extend_from_slice(&[v, v, v, 255]);
-        }
-    }
-    s.images.push(super::Image { name: "checker".into(), width: size, height: size, rgba8: rgba });
-    s.textures.push(super::Texture {
-        image: Some(0),
-        sampler: super::Sampler {
-            mag_filter: super::Filter::Nearest,
-            min_filter: super::Filter::Nearest,
-            mipmaps: false,
-            wrap_s: super::Wrap::Repeat,
-            wrap_t: super::Wrap::Repeat,
-        },
-    });
+    let checker = add_checker(&mut s);
     let mut wall = diffuse("wall", 1.0);
-    wall.base_color_texture =
-        Some(super::TextureRef { texture: 0, uv_set: 0, transform: glam::Mat3::from_scale(glam::Vec2::new(4.0, 1.5)) });
+    wall.base_color_texture = Some(super::TextureRef {
+        texture: checker,
+        uv_set: 0,
+        transform: glam::Mat3::from_scale(glam::Vec2::new(4.0, 1.5)),
+    });
     s.materials.push(wall);
     s.materials.push(diffuse("floor", 0.6));
     s.materials.push(diffuse("cube", 0.03));
@@ -422,4 +434,59 @@ mod tests {
             assert!((p - Vec3::new(0.0, 1.0, 0.0)).dot(n) > 0.99, "{}: normal {n} at {p}", m.name);
         }
     }
+}
+
+/// Facts about `mirror`.
+pub mod mirror_facts {
+    /// The mirror floor's instance (after the wall's).
+    pub const FLOOR_INSTANCE: u32 = 1;
+    /// The `truck` camera moves from x = -TRUCK to +TRUCK between TRUCK_START and TRUCK_END
+    /// (0.056 a frame at 30 frames a second), always looking the same way.
+    pub const TRUCK: f32 = 0.5;
+    pub const TRUCK_START: f32 = 1.0;
+    pub const TRUCK_END: f32 = 1.6;
+}
+
+/// A near-mirror floor (metal, roughness 0.05) reflecting a sunlit checkerboard wall; the
+/// `truck` camera looks down at the floor and moves sideways, so the reflection (about 6 away,
+/// behind the mirror) and the floor (about 2.5 away) move across the screen at different speeds.
+pub fn mirror() -> Scene {
+    use mirror_facts::*;
+    let mut s = Scene { name: "builtin:stability-mirror".into(), ..Default::default() };
+    let checker = add_checker(&mut s);
+    let mut wall = diffuse("wall", 1.0);
+    wall.base_color_texture = Some(super::TextureRef {
+        texture: checker,
+        uv_set: 0,
+        transform: glam::Mat3::from_scale(glam::Vec2::new(2.0, 0.75)),
+    });
+    s.materials.push(wall);
+    s.materials.push(Material {
+        name: "mirror".into(),
+        base_color_factor: Vec4::new(0.9, 0.9, 0.9, 1.0),
+        metallic_factor: 1.0,
+        roughness_factor: 0.05,
+        ..Default::default()
+    });
+    add(&mut s, "wall", quad(Vec3::new(0.0, 2.0, -4.0), Vec3::X * 16.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
+    add(&mut s, "floor", quad(Vec3::new(0.0, -1.0, 0.0), Vec3::Z * 12.0, Vec3::X * 16.0, 1), Vec3::ZERO);
+    let from = Vec3::new(-TRUCK, 0.5, 2.0);
+    let truck = s.nodes.len() as u32;
+    s.nodes.push(looking("truck", from, from + Vec3::new(0.0, -1.2, -2.5)));
+    s.cameras.push(camera("truck", 0.9, truck));
+    let sun = s.nodes.len() as u32;
+    s.nodes.push(looking("sun", Vec3::ZERO, Vec3::new(0.2, -0.4, -1.0)));
+    s.lights.push(light("sun", LightKind::Directional, 3.0, sun));
+    let to = Vec3::new(TRUCK, from.y, from.z);
+    s.animations.push(Animation {
+        name: "truck".into(),
+        channels: vec![Channel {
+            node: truck,
+            property: Property::Translation,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, TRUCK_START, TRUCK_END, HOLD],
+            values: vec![from.extend(0.0), from.extend(0.0), to.extend(0.0), to.extend(0.0)],
+        }],
+    });
+    s
 }

@@ -104,11 +104,18 @@ pub const fn iteration(signal: &'static str, i: u32) -> Instance {
     Instance { signal: Some(signal), iteration: Some(i) }
 }
 
-/// The chain filtering `input` (a demodulated RGBA32F signal) under the name `signal`.
-pub fn chain(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSettings) -> Result<Chain> {
+/// The chain filtering `input` (a demodulated RGBA32F signal) under the name `signal`;
+/// `hit_distance` for a signal of reflection rays (see [`temporal::new`]).
+pub fn chain(
+    b: &PassBuilder,
+    signal: &'static str,
+    input: Resource,
+    hit_distance: Option<Resource>,
+    s: &SvgfSettings,
+) -> Result<Chain> {
     let iterations = s.iterations.max(1);
     let mut passes: Vec<Box<dyn Pass>> =
-        vec![Box::new(temporal::new(b, signal, input, s)?), Box::new(variance::new(b, signal, s)?)];
+        vec![Box::new(temporal::new(b, signal, input, hit_distance, s)?), Box::new(variance::new(b, signal, s)?)];
     for i in 0..iterations {
         passes.push(Box::new(atrous::new(b, signal, i, s)?));
     }

@@ -1,5 +1,7 @@
 //! svgf_temporal_<signal>: reprojected temporal accumulation of colour and luminance moments
-//! with a history length (shaders-glsl/svgf_temporal.comp).
+//! with a history length (shaders-glsl/svgf_temporal.comp). The specular chain behind the
+//! reflections pass reprojects a narrow lobe's history from the reflected object's virtual
+//! position instead (svgf_temporal_specular.comp, common/svgf_temporal.glsl).
 
 use super::{SvgfSettings, atrous, iteration, signal};
 use crate::gpu::vk;
@@ -20,10 +22,18 @@ pub const HISTORY_LENGTH: Output = Output::new(NAME, "history_length");
 /// Non-finite input samples caught since the first frame (texel 0,0).
 pub const REJECTED: Output = Output::new(NAME, "rejected");
 
-/// `input` is the signal to filter (bound as `in_signal`).
-pub fn new(b: &PassBuilder, signal_name: &'static str, input: Resource, s: &SvgfSettings) -> Result<FullscreenPass> {
+/// `input` is the signal to filter (bound as `in_signal`). `hit_distance`, where the signal is
+/// made of reflection rays (`reflections::HIT_DISTANCE`): their mean hit distance, which moves
+/// a narrow lobe's history with the reflected object rather than the surface.
+pub fn new(
+    b: &PassBuilder,
+    signal_name: &'static str,
+    input: Resource,
+    hit_distance: Option<Resource>,
+    s: &SvgfSettings,
+) -> Result<FullscreenPass> {
     let run = signal(signal_name);
-    let inputs = vec![
+    let mut inputs = vec![
         Input::texel(input).bound_as("in_signal"),
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::NORMAL_GEO),
@@ -36,6 +46,11 @@ pub fn new(b: &PassBuilder, signal_name: &'static str, input: Resource, s: &Svgf
         Input::texel(history::of(MOMENTS.of(run))),
         Input::texel(history::of(HISTORY_LENGTH.of(run))),
     ];
+    let mut shader = "svgf_temporal.comp".to_string();
+    if let Some(hit_distance) = hit_distance {
+        shader = format!("{}.comp", COLOR.of(run).pass_name());
+        inputs.extend([Input::texel(hit_distance).bound_as("in_hit_distance"), Input::texel(gbuffer::METAL_ROUGH)]);
+    }
     let outputs = vec![
         OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         OutputDesc::storage(MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
@@ -43,5 +58,5 @@ pub fn new(b: &PassBuilder, signal_name: &'static str, input: Resource, s: &Svgf
         OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
     ];
     let push = s.push_constants(0);
-    FullscreenPass::new(b, &COLOR.of(run).pass_name(), "svgf_temporal.comp", inputs, outputs, &push)
+    FullscreenPass::new(b, &COLOR.of(run).pass_name(), &shader, inputs, outputs, &push)
 }

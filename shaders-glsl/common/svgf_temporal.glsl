@@ -1,0 +1,193 @@
+// svgf_temporal_<signal> (svgf_temporal.comp, svgf_temporal_specular.comp): temporal
+// accumulation of one demodulated signal (diffuse or specular). The
+// previous frame's filtered colour (the first a-trous iteration, copied by `history`), moments
+// and history length are reprojected through the motion vectors with bilinear taps that each
+// pass the validity test (on screen, same instance, depth, geometric normal); the new frame is blended in
+// with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
+// counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood, so
+// neither poisons the history.
+//
+// With SVGF_REFLECTION_MOTION defined (the specular chain behind the reflections pass) the
+// history of a narrow lobe is fetched where the reflected object was, not where the surface
+// was: the reflection of a point at hit distance d appears at the virtual point p + d view_dir
+// behind a mirror, and a moving camera sees it move with that point's parallax, not the
+// surface's. The lobe's width decides between the two (roughness), and caps the history: a
+// glossy reflection changes with the view even where the reprojection is right. It also
+// narrows the spatial filter's footprint (written in the colour's alpha for svgf_atrous): a
+// mirror's reflection is as sharp as what it reflects.
+#ifndef SVGF_TEMPORAL_GLSL
+#define SVGF_TEMPORAL_GLSL
+
+#include "common/scene.glsl"
+#include "common/gbuffer.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_signal;
+layout(set = 1, binding = 1, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
+// The geometric (face) normal: reprojection asks whether the previous sample lies on the same
+// surface, and a crease that smooth vertex normals round off is still a different surface.
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
+layout(set = 1, binding = 3, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_motion;
+layout(set = 1, binding = 5, rg32f) uniform readonly image2D prev_depth;
+layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal_geo;
+layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
+layout(set = 1, binding = 8, rgba32f) uniform readonly image2D prev_color;
+layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
+layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_history_length;
+#ifdef SVGF_REFLECTION_MOTION
+// reflections.hit_distance: mean distance to what the reflection rays hit (0: none traced).
+layout(set = 1, binding = 11, r32f) uniform readonly image2D in_hit_distance;
+layout(set = 1, binding = 12, rgba8) uniform readonly image2D g_metal_rough;
+#define SVGF_OUT 13  // outputs follow the inputs
+#else
+#define SVGF_OUT 11
+#endif
+layout(set = 1, binding = SVGF_OUT, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = SVGF_OUT + 1, rg32f) uniform writeonly image2D out_moments;
+layout(set = 1, binding = SVGF_OUT + 2, r32f) uniform writeonly image2D out_history_length;
+// x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
+layout(set = 1, binding = SVGF_OUT + 3, r32ui) uniform uimage2D out_rejected;
+
+#include "common/svgf.glsl"
+
+// The input sample with non-finite values removed (false when it was not finite).
+bool load_finite(ivec2 q, out vec3 c) {
+    c = imageLoad(in_signal, q).rgb;
+    if (finite3(c)) return true;
+    c = vec3(0.0);
+    return false;
+}
+
+// Scales `c` so its luminance is at most mean + k sigma of the 7x7 neighbourhood (surface
+// pixels only), which takes the energy out of fireflies before anything accumulates them.
+vec3 clamp_outlier(ivec2 px, vec3 c) {
+    // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
+    if (isinf(svgf.clamp_sigma)) return c;
+    float sum = 0.0, sum2 = 0.0, n = 0.0;
+    for (int dy = -3; dy <= 3; ++dy) {
+        for (int dx = -3; dx <= 3; ++dx) {
+            // The centre is left out, so a lone firefly cannot widen its own bound.
+            if (dx == 0 && dy == 0) continue;
+            ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
+            if (imageLoad(g_ids, q).x == NO_INSTANCE) continue;
+            vec3 s;
+            load_finite(q, s);
+            float l = luminance(s);
+            sum += l;
+            sum2 += l * l;
+            n += 1.0;
+        }
+    }
+    float mean = sum / max(n, 1.0);
+    float sigma = sqrt(max(0.0, sum2 / max(n, 1.0) - mean * mean));
+    float l = luminance(c);
+    float limit = mean + svgf.clamp_sigma * sigma;
+    return l > limit && l > 0.0 ? c * (limit / l) : c;
+}
+
+#ifdef SVGF_REFLECTION_MOTION
+// Below x the reflection follows the virtual point only, above y the surface only.
+const vec2 VIRTUAL_MOTION_ROUGHNESS = vec2(0.15, 0.4);
+// A mirror's history is capped at this many frames, rising to svgf.history_cap at roughness
+// GLOSSY_CAP_ROUGHNESS.
+const float GLOSSY_HISTORY_CAP = 8.0;
+const float GLOSSY_CAP_ROUGHNESS = 0.5;
+// The spatial filter's footprint grows from nothing at roughness x to all of it at y.
+const vec2 SHARP_ROUGHNESS = vec2(0.05, 0.35);
+
+vec2 ndc_of(mat4 view_proj, vec3 p) {
+    vec4 c = view_proj * vec4(p, 1.0);
+    return c.xy / c.w;
+}
+
+// Where the reflection seen at px (view depth z, hit distance `hit`) was last frame: the
+// motion of the virtual point behind the surface, in the motion vectors' convention.
+vec2 virtual_prev_pos(ivec2 px, float z, float hit) {
+    vec3 p = world_position(px, z);
+    vec3 v = p + normalize(p - frame.camera_pos) * hit;
+    vec2 motion = (ndc_of(frame.view_proj, v) - ndc_of(frame.prev_view_proj, v)) * 0.5 * vec2(frame.size);
+    return vec2(px) + 0.5 - motion;
+}
+#endif
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
+    uint id = imageLoad(g_ids, px).x;
+    if (id == NO_INSTANCE) {
+        imageStore(out_color, px, vec4(0.0));
+        imageStore(out_moments, px, vec4(0.0));
+        imageStore(out_history_length, px, vec4(0.0));
+        return;
+    }
+    vec3 c;
+    bool finite = load_finite(px, c);
+    if (!finite) imageAtomicAdd(out_rejected, ivec2(0), 1u);
+    c = clamp_outlier(px, c);
+
+    vec2 zf = imageLoad(g_depth, px).rg;
+    float z = zf.x;
+    vec3 ng = imageLoad(g_normal_geo, px).xyz;
+    float fw = zf.y;
+    // Where this pixel's surface was last frame, in continuous pixel coordinates.
+    vec2 prev_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
+    float cap = svgf.history_cap;
+    // The depth test's tolerance: fetched away from the surface's own motion (the virtual
+    // point's), the previous sample is on the same surface a few pixels off, where depth
+    // differs by about fwidth per pixel.
+    float fw_tolerance = fw;
+    // How far the a-trous iterations may spread this pixel's light (the colour's alpha): all
+    // the way, but for a narrow lobe, whose reflection is as sharp as what it reflects.
+    float footprint = 1.0;
+#ifdef SVGF_REFLECTION_MOTION
+    float roughness = imageLoad(g_metal_rough, px).y;
+    float virtual_weight = 1.0 - smoothstep(VIRTUAL_MOTION_ROUGHNESS.x, VIRTUAL_MOTION_ROUGHNESS.y, roughness);
+    float hit = imageLoad(in_hit_distance, px).r;
+    if (hit > 0.0 && virtual_weight > 0.0) {
+        vec2 surface_pos = prev_pos;
+        prev_pos = mix(prev_pos, virtual_prev_pos(px, z, hit), virtual_weight);
+        fw_tolerance = fw * (1.0 + distance(prev_pos, surface_pos));
+    }
+    cap = mix(GLOSSY_HISTORY_CAP, cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
+    footprint = smoothstep(SHARP_ROUGHNESS.x, SHARP_ROUGHNESS.y, roughness);
+#endif
+    vec2 base = floor(prev_pos - 0.5);
+    vec2 f = prev_pos - 0.5 - base;
+    vec3 hist_c = vec3(0.0);
+    vec2 hist_m = vec2(0.0);
+    float hist_len = 0.0, wsum = 0.0;
+    // A camera cut, or lights that changed since last frame: the history holds light that is
+    // gone (the lag a lit history would add is the whole accumulation window).
+    bool reset = (frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u;
+    for (int i = 0; i < 4 && !reset; ++i) {
+        ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
+        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
+        if (!svgf_consistent(z, imageLoad(prev_depth, q).r, fw_tolerance, ng, imageLoad(prev_normal_geo, q).xyz, id,
+                             imageLoad(prev_ids, q).x)) continue;
+        float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+        hist_c += w * imageLoad(prev_color, q).rgb;
+        hist_m += w * imageLoad(prev_moments, q).xy;
+        hist_len += w * imageLoad(prev_history_length, q).r;
+        wsum += w;
+    }
+    float l = luminance(c);
+    vec2 moments = vec2(l, l * l);
+    float len = 1.0;
+    if (wsum > 1e-3) {
+        hist_c /= wsum;
+        hist_m /= wsum;
+        len = min(hist_len / wsum + 1.0, cap);
+        float a = max(svgf.alpha, 1.0 / len);
+        float am = max(svgf.moments_alpha, 1.0 / len);
+        // A dropped (non-finite) sample leaves the history as it was.
+        c = finite ? mix(hist_c, c, a) : hist_c;
+        moments = finite ? mix(hist_m, moments, am) : hist_m;
+    }
+    imageStore(out_color, px, vec4(c, footprint));
+    imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
+    imageStore(out_history_length, px, vec4(len));
+}
+
+#endif
