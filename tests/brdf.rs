@@ -16,8 +16,8 @@
 //!   hemisphere (the directional albedo) within 4 standard errors plus 0.2 %, and stays <= 1
 //!   (energy conservation) for white materials where the model conserves energy (every
 //!   material of the coupled model, metals of the glTF one: its fresnel_mix dielectric
-//!   reflects more than 1 at grazing views, src/render/brdf.rs);
-//! - brdf_eval_cos equals the CPU mirror (src/render/brdf.rs) at the quadrature directions.
+//!   reflects more than 1 at grazing views, src/world/brdf.rs);
+//! - brdf_eval_cos equals the CPU mirror (src/world/brdf.rs) at the quadrature directions.
 
 mod common;
 
@@ -26,7 +26,7 @@ use hybrid_rt::gpu::{
     Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, MemoryLocation, Pipeline,
     PushResource, Recorder, ShaderLibrary, vk,
 };
-use hybrid_rt::render::brdf::{self, Brdf, BrdfModel};
+use hybrid_rt::world::brdf::{self, Brdf, BrdfModel};
 use std::f64::consts::PI;
 use std::sync::Arc;
 

@@ -15,16 +15,12 @@ const LAYERS: &[&[&str]] = &[
     &["render"],
     &["passes"],
     &["graph"],
+    &["world"],
     &["accel"],
     &["backend"],
     &["scene", "metrics"],
     &["gpu", "image_io", "progress"],
 ];
-
-/// Upward uses known and tolerated for now: (from module, path). TODO(lead): the scene's GPU
-/// buffers (`render::SceneGpu`) move below graph and passes; then delete these two lines (the
-/// test fails while an allowance here is no longer needed, so it cannot go stale).
-const ALLOWED_UPWARD: &[(&str, &str)] = &[("graph", "render::SceneGpu"), ("passes", "render::SceneGpu")];
 
 fn layer_of(module: &str) -> Option<usize> {
     LAYERS.iter().position(|layer| layer.contains(&module))
@@ -252,8 +248,8 @@ fn crate_paths(src: &str, depth: usize) -> Vec<Vec<String>> {
 }
 
 /// The layering violations of one file of module `from` (a module of the crate root),
-/// `depth` modules below the root. Allowances used are recorded in `used`.
-fn violations(from: &str, depth: usize, src: &str, used: &mut BTreeSet<(String, String)>) -> Vec<String> {
+/// `depth` modules below the root.
+fn violations(from: &str, depth: usize, src: &str) -> Vec<String> {
     let Some(from_layer) = layer_of(from) else {
         return vec![format!("module `{from}` is not in LAYERS (tests/layering.rs) nor in src/lib.rs's order")];
     };
@@ -271,12 +267,6 @@ fn violations(from: &str, depth: usize, src: &str, used: &mut BTreeSet<(String, 
             continue;
         }
         let shown = path.join("::");
-        if let Some(&(f, p)) =
-            ALLOWED_UPWARD.iter().find(|&&(f, p)| f == from && (shown == p || shown.starts_with(&format!("{p}::"))))
-        {
-            used.insert((f.to_string(), p.to_string()));
-            continue;
-        }
         let how = if to_layer == from_layer { "sits in the same layer as" } else { "sits above" };
         out.push(format!("`{from}` uses `crate::{shown}`: `{to}` {how} `{from}`"));
     }
@@ -322,21 +312,15 @@ fn imports_point_down_the_layers() {
     let files = rust_files(&src);
     assert!(files.len() > 50, "found only {} files under {}", files.len(), src.display());
     let mut problems = Vec::new();
-    let mut used = BTreeSet::new();
     let mut checked = 0;
     for file in &files {
         let rel = file.strip_prefix(&src).expect("under src");
         let Some((module, depth)) = module_of(rel) else { continue };
         let text = std::fs::read_to_string(file).expect("readable source");
-        for v in violations(&module, depth, &text, &mut used) {
+        for v in violations(&module, depth, &text) {
             problems.push(format!("{}: {v}", rel.display()));
         }
         checked += 1;
-    }
-    for &(f, p) in ALLOWED_UPWARD {
-        if !used.contains(&(f.to_string(), p.to_string())) {
-            problems.push(format!("the allowance ({f} -> {p}) is no longer needed: remove it from ALLOWED_UPWARD"));
-        }
     }
     assert!(problems.is_empty(), "{} layering problem(s) in {checked} files:\n{}", problems.len(), problems.join("\n"));
 }
@@ -409,7 +393,6 @@ fn unsafe_only_in_gpu() {
 /// The checker itself finds what it must (so the tests above cannot pass by finding nothing).
 #[test]
 fn checker_finds_upward_paths() {
-    let mut used = BTreeSet::new();
     let src = r#"
         //! crate::cli in a comment is not a use
         use crate::{gpu::Context, cli::progress};
@@ -417,18 +400,16 @@ fn checker_finds_upward_paths() {
         fn f() { let s = "crate::app"; crate::cli::main(); crate::render::frame(); let c = '{'; }
         mod tests { use super::super::super::cli::x; use super::super::sweep; }
     "#;
-    let v = violations("bench", 2, src, &mut used);
+    let v = violations("bench", 2, src);
     assert_eq!(v.len(), 4, "{v:#?}");
     assert!(v[0].contains("crate::cli::progress"), "{v:#?}");
     assert!(v[1].contains("crate::app::Viewer"), "{v:#?}");
     assert!(v[2].contains("crate::cli::main"), "{v:#?}");
     assert!(v[3].contains("crate::cli::x"), "{v:#?}");
-    // Downward and same-module paths pass; the allowance applies to its one path only.
-    assert!(
-        violations("render", 1, "use crate::{passes, gpu::vk, render::x}; use super::scene;", &mut used).is_empty()
-    );
-    assert!(violations("graph", 1, "use crate::render::SceneGpu;", &mut used).is_empty());
-    assert_eq!(violations("graph", 1, "use crate::render::Renderer;", &mut used).len(), 1);
-    assert_eq!(violations("scene", 1, "use crate::metrics::flip;", &mut used).len(), 1, "same layer");
-    assert_eq!(violations("newmod", 1, "", &mut used).len(), 1, "unlisted module");
+    // Downward and same-module paths pass.
+    assert!(violations("render", 1, "use crate::{passes, gpu::vk, render::x}; use super::scene;").is_empty());
+    assert!(violations("graph", 1, "use crate::world::SceneGpu;").is_empty());
+    assert_eq!(violations("graph", 1, "use crate::render::Renderer;").len(), 1);
+    assert_eq!(violations("scene", 1, "use crate::metrics::flip;").len(), 1, "same layer");
+    assert_eq!(violations("newmod", 1, "").len(), 1, "unlisted module");
 }

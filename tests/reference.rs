@@ -23,10 +23,10 @@ use hybrid_rt::backend::Backend;
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::{self, CpuImage, Texels};
 use hybrid_rt::passes::pathtrace;
-use hybrid_rt::render::brdf::BrdfModel;
-use hybrid_rt::render::environment;
 use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
 use hybrid_rt::scene::{Camera, Instance, Light, LightKind, LoadOptions, Material, Node, Scene, builtin, load_gltf};
+use hybrid_rt::world::brdf::BrdfModel;
+use hybrid_rt::world::environment;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
@@ -101,7 +101,7 @@ impl Brdf {
     }
 
     fn eval_cos_model(&self, model: BrdfModel, n: DVec3, v: DVec3, l: DVec3) -> DVec3 {
-        let b = hybrid_rt::render::brdf::Brdf { base: self.base, metallic: self.metallic, roughness: self.roughness };
+        let b = hybrid_rt::world::brdf::Brdf { base: self.base, metallic: self.metallic, roughness: self.roughness };
         b.eval_cos(model, n, v, l)
     }
 
@@ -495,7 +495,7 @@ fn white_furnace() {
     //   <= 1 (up to 4 standard errors); the mirror loses almost nothing and must give 1 within
     //   0.2 %. Both models share the specular lobe.
     // - The glTF model's dielectrics (fresnel_mix) conserve nothing in particular: a glossy white
-    //   one reflects more than 1 at grazing views (src/render/brdf.rs); only the match with the
+    //   one reflects more than 1 at grazing views (src/world/brdf.rs); only the match with the
     //   model's albedo is checked.
     // - The coupled model: every material stays <= 1, and in white dielectrics the diffuse lobe
     //   takes exactly what the specular lobe leaves, so they must give 1 within 4 standard

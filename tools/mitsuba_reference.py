@@ -27,7 +27,7 @@ DRJIT_LIBLLVM_PATH). `--variant scalar_rgb` needs no LLVM but is far slower.
 
 Light units as hybrid-rt reads them: emission is radiance (W/sr/m^2), a point light's
 intensity is W/sr. Lights are chosen for next-event estimation in proportion to their power,
-as hybrid-rt does (src/render/lights.rs), through Mitsuba's `sampling_weight`: only variance
+as hybrid-rt does (src/world/lights.rs), through Mitsuba's `sampling_weight`: only variance
 depends on it, but the comparison of noise levels is fairer with the same choice.
 """
 

@@ -1,8 +1,8 @@
 // The one material model: glTF metallic-roughness, Lambert diffuse plus a GGX specular lobe with
 // height-correlated Smith visibility and Schlick Fresnel. Every pass and the reference path
-// tracer evaluate light through these functions; src/render/brdf.rs mirrors them on the CPU.
+// tracer evaluate light through these functions; src/world/brdf.rs mirrors them on the CPU.
 //
-// How the two lobes share the light is the model (brdf_model, src/render/brdf.rs BrdfModel):
+// How the two lobes share the light is the model (brdf_model, src/world/brdf.rs BrdfModel):
 // - BRDF_MODEL_GLTF (the default): glTF 2.0 Appendix B exactly. The dielectric is
 //   fresnel_mix(Lambert, GGX) with F = 0.04 + 0.96 (1 - |v.h|)^5, the metal is the GGX layer
 //   with Schlick Fresnel on baseColor, and the material is their mix by metallic. Its specular

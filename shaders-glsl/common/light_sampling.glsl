@@ -8,7 +8,7 @@
 //   - the environment: a constant colour, or an equirectangular map sampled by
 //     luminance * sin(theta) through a marginal and conditional CDF.
 // One light is chosen per sample from a CDF over all of them by power, built on the CPU
-// (src/render/lights.rs, src/render/environment.rs), which also fills set-0 bindings 12..16.
+// (src/world/lights.rs, src/world/environment.rs), which also fills set-0 bindings 12..16.
 #ifndef LIGHT_SAMPLING_GLSL
 #define LIGHT_SAMPLING_GLSL
 
@@ -72,7 +72,7 @@ layout(set = 0, binding = 16, scalar) readonly buffer EnvCdf { float env_cdf[]; 
 // Equirectangular: u = 0.5 + atan(x, -z) / 2pi (u = 0.5 looks down -Z), v = theta / pi with
 // theta measured from +Y (row 0 is the zenith). Lookups are nearest-texel, so radiance is
 // piecewise constant per texel, exactly as the CDF assumes: sampling density and radiance
-// match texel for texel. Mirrored by src/render/environment.rs.
+// match texel for texel. Mirrored by src/world/environment.rs.
 
 vec2 env_uv(vec3 dir) {
     return vec2(atan(dir.x, -dir.z) * (0.5 * INV_PI) + 0.5, acos(clamp(dir.y, -1.0, 1.0)) * INV_PI);

@@ -1,5 +1,5 @@
 // Set 0: the scene, shared by every pass. Buffers use scalar layout so the Rust structs in
-// src/render/scene_gpu.rs match them byte for byte (see the `gpu_layout` test there).
+// src/world/scene_gpu.rs match them byte for byte (see the `gpu_layout` test there).
 #ifndef SCENE_GLSL
 #define SCENE_GLSL
 

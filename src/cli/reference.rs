@@ -41,7 +41,7 @@ pub struct ReferenceArgs {
     environment: EnvironmentArgs,
     /// Material model: `gltf` (glTF 2.0 Appendix B) or `coupled` (energy-coupled diffuse).
     #[arg(long, value_enum, default_value_t)]
-    brdf: crate::render::brdf::BrdfModel,
+    brdf: crate::world::brdf::BrdfModel,
     /// Scattering events per path at most; 1 renders direct light only. Russian roulette ends
     /// paths well before the default, which only guards against endless paths.
     #[arg(long, default_value_t = 256)]

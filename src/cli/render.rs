@@ -63,7 +63,7 @@ pub struct RenderArgs {
     environment: EnvironmentArgs,
     /// Material model: `gltf` (glTF 2.0 Appendix B) or `coupled` (energy-coupled diffuse).
     #[arg(long, value_enum, default_value_t)]
-    brdf: crate::render::brdf::BrdfModel,
+    brdf: crate::world::brdf::BrdfModel,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,

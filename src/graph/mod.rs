@@ -10,7 +10,7 @@ mod sync;
 pub use resource::{Instance, Output, Resource};
 
 use crate::gpu::{self, Context, Image, Recorder, TimestampPool, vk};
-use crate::render::SceneGpu;
+use crate::world::SceneGpu;
 use anyhow::{Result, bail};
 use std::collections::HashMap;
 use std::sync::Arc;

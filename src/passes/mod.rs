@@ -18,7 +18,7 @@ pub mod taa;
 pub mod tonemap;
 
 use crate::gpu::{Context, ShaderLibrary};
-use crate::render::SceneGpu;
+use crate::world::SceneGpu;
 use std::sync::Arc;
 
 /// What every pass constructor needs.

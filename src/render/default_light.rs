@@ -13,9 +13,9 @@
 //! centroid, so an emissive texture that is black almost everywhere (a helmet's indicator
 //! lights) counts for the little it emits.
 
-use super::environment::{Environment, EnvironmentData, luminance};
 use super::sky;
 use crate::scene::{Scene, TextureRef};
+use crate::world::environment::{Environment, EnvironmentData, luminance};
 use anyhow::Result;
 use glam::{Vec2, Vec3};
 

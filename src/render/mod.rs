@@ -1,22 +1,17 @@
 //! The renderer: a scene on the GPU, the frame graph of passes, and the per-frame loop that
 //! advances animation, updates the camera and records, submits and times one frame.
 
-pub mod brdf;
 pub mod camera;
 pub mod default_light;
-mod deform;
-pub mod environment;
 pub mod frame;
-pub mod lights;
-mod mips;
 pub mod plan;
 pub mod ray_batch;
-pub mod scene_gpu;
 pub mod sky;
 
 pub use camera::{CameraChoice, View};
-pub use environment::Environment;
-pub use scene_gpu::{FrameUniforms, SceneGpu};
+// The environment setting belongs with the renderer's settings; the data it loads lives in
+// world::environment beside the other GPU scene data.
+pub use crate::world::environment::Environment;
 
 use crate::backend::Backend;
 use crate::gpu::{CommandPool, Context, Recorder, ShaderLibrary, vk};
@@ -24,6 +19,7 @@ use crate::graph::{Graph, Output, PassTime, Resource};
 use crate::image_io::CpuImage;
 use crate::passes::{self, PassBuilder};
 use crate::scene::{Pose, Scene};
+use crate::world::{FrameUniforms, SceneGpu, brdf, scene_gpu};
 use anyhow::{Result, bail};
 use glam::Vec2;
 use std::sync::Arc;

@@ -1,12 +1,12 @@
 //! Tracing a list of rays through the scene's ray backend (shaders-glsl/trace_rays.comp): the
 //! ray benchmark and the backend-agreement tests run exactly the same rays on both backends.
 
-use super::SceneGpu;
 use crate::accel::bvh::rays::Ray;
 use crate::gpu::{
     Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSetLayout, MemoryLocation, Pipeline, PushResource,
     Recorder, ShaderLibrary, TimestampPool, vk,
 };
+use crate::world::SceneGpu;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;

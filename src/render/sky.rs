@@ -18,7 +18,7 @@
 //!   horizontal diffuse surface reflects radiance 1, as under `--sky 1,1,1`: the tonemapper's
 //!   exposure 1 suits it, as it suits the scenes' own emissive values.
 
-use super::environment::{EnvironmentData, direction, luminance, texel_solid_angle, uv};
+use crate::world::environment::{EnvironmentData, direction, luminance, texel_solid_angle, uv};
 use glam::{DVec3, Vec2, Vec3};
 use std::f64::consts::PI;
 use std::sync::OnceLock;

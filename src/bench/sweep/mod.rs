@@ -207,7 +207,7 @@ fn reference(
     let start = Instant::now();
     let (w, h) = (opts.width, opts.height);
     let camera = camera_key(&opts.camera);
-    let brdf = format!("{:?}", crate::render::brdf::BrdfModel::default()).to_lowercase();
+    let brdf = format!("{:?}", crate::world::brdf::BrdfModel::default()).to_lowercase();
     let stem = format!("{scene_hash}-{camera}-{w}x{h}-{}spp-{}b-{brdf}", opts.reference_spp, opts.reference_bounces);
     let dir = opts.cache_dir.join("reference");
     let (exr, sidecar) = (dir.join(format!("{stem}.exr")), dir.join(format!("{stem}.json")));

@@ -2,7 +2,7 @@
 //! material and light tables, textures with CPU-built mip chains, and the scene descriptor set
 //! (set 0) every pass binds. Geometry and textures are uploaded once; the instance table and
 //! the lights are rewritten each frame from the animated pose, and deforming meshes' vertices
-//! when their morph weights change (src/render/deform.rs).
+//! when their morph weights change (src/world/deform.rs).
 
 use super::environment::EnvironmentData;
 use super::lights::{self, LightTables};
@@ -30,13 +30,13 @@ pub mod binding {
     pub const LIGHTS: u32 = 6;
     pub const TEXTURES: u32 = 7;
     // 8..11: the ray backend (src/accel).
-    // 12..16: light sampling (src/render/lights.rs, shaders-glsl/common/light_sampling.glsl).
+    // 12..16: light sampling (src/world/lights.rs, shaders-glsl/common/light_sampling.glsl).
     pub const LIGHT_TABLE: u32 = 12;
     pub const EMITTERS: u32 = 13;
     pub const EMITTER_BASE: u32 = 14;
     pub const ENV_TEXELS: u32 = 15;
     pub const ENV_CDF: u32 = 16;
-    /// The material model and the specular directional-albedo table (src/render/brdf.rs).
+    /// The material model and the specular directional-albedo table (src/world/brdf.rs).
     pub const BRDF_DATA: u32 = 17;
 }
 
