@@ -6,10 +6,14 @@
 // seen last frame at the reprojected spot moved differently from the one seen now, something
 // uncovered this pixel and the history is dropped. (An id test would also drop the history at
 // every silhouette, where the jitter alternates between two surfaces, and nothing would be
-// anti-aliased.)
+// anti-aliased.) On a metal with a narrow lobe, whose colour is all reflection, the history is
+// fetched where the reflected object was (common/reflection_motion.glsl), as the specular
+// chain's SVGF history is; the disocclusion test still asks about the surface.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
+#include "common/gbuffer.glsl"
 #include "common/color.glsl"
+#include "common/reflection_motion.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -17,7 +21,11 @@ layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, rg32f) uniform readonly image2D g_motion;
 layout(set = 1, binding = 2, rg32f) uniform readonly image2D prev_motion;
 layout(set = 1, binding = 3) uniform sampler2D prev_color;
-layout(set = 1, binding = 4, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 5, rgba8) uniform readonly image2D g_metal_rough;
+// reflections.hit_distance (a zero image when the frame traces no reflection rays).
+layout(set = 1, binding = 6, r32f) uniform readonly image2D in_hit_distance;
+layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_color;
 
 // Motion vectors differing by more than this many pixels belong to different surfaces.
 #define DISOCCLUSION_MOTION 0.5
@@ -86,10 +94,18 @@ void main() {
         vec2 prev_surface_motion = imageLoad(prev_motion, ivec2(floor(prev_pos))).xy;
         valid = length(prev_surface_motion - motion) <= DISOCCLUSION_MOTION;
     }
+    vec2 metal_rough = imageLoad(g_metal_rough, px).xy;
+    float hit = imageLoad(in_hit_distance, px).r;
+    float mirror = metal_rough.x * reflection_motion_weight(metal_rough.y);
+    if (valid && hit > 0.0 && mirror > 0.0) {
+        vec2 reflected = mix(prev_pos, reflection_prev_pos(px, imageLoad(g_depth, px).r, hit), mirror);
+        if (all(greaterThanEqual(reflected, vec2(0.0))) && all(lessThan(reflected, vec2(frame.size)))) prev_pos = reflected;
+    }
     vec3 result = cur;
     if (valid) {
         vec3 hist = to_ycocg(history_catmull_rom(prev_pos));
-        float blend = mix(taa.blend, FAST_BLEND, clamp(length(motion) / FAST_MOTION, 0.0, 1.0));
+        vec2 moved = vec2(px) + 0.5 - prev_pos;
+        float blend = mix(taa.blend, FAST_BLEND, clamp(length(moved) / FAST_MOTION, 0.0, 1.0));
         result = mix(from_ycocg(clamp(hist, lo, hi)), cur, blend);
     }
     imageStore(out_color, px, vec4(result, 1.0));

@@ -20,6 +20,7 @@
 
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
+#include "common/reflection_motion.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -88,28 +89,12 @@ vec3 clamp_outlier(ivec2 px, vec3 c) {
 }
 
 #ifdef SVGF_REFLECTION_MOTION
-// Below x the reflection follows the virtual point only, above y the surface only.
-const vec2 VIRTUAL_MOTION_ROUGHNESS = vec2(0.15, 0.4);
 // A mirror's history is capped at this many frames, rising to svgf.history_cap at roughness
 // GLOSSY_CAP_ROUGHNESS.
 const float GLOSSY_HISTORY_CAP = 8.0;
 const float GLOSSY_CAP_ROUGHNESS = 0.5;
 // The spatial filter's footprint grows from nothing at roughness x to all of it at y.
 const vec2 SHARP_ROUGHNESS = vec2(0.05, 0.35);
-
-vec2 ndc_of(mat4 view_proj, vec3 p) {
-    vec4 c = view_proj * vec4(p, 1.0);
-    return c.xy / c.w;
-}
-
-// Where the reflection seen at px (view depth z, hit distance `hit`) was last frame: the
-// motion of the virtual point behind the surface, in the motion vectors' convention.
-vec2 virtual_prev_pos(ivec2 px, float z, float hit) {
-    vec3 p = world_position(px, z);
-    vec3 v = p + normalize(p - frame.camera_pos) * hit;
-    vec2 motion = (ndc_of(frame.view_proj, v) - ndc_of(frame.prev_view_proj, v)) * 0.5 * vec2(frame.size);
-    return vec2(px) + 0.5 - motion;
-}
 #endif
 
 void main() {
@@ -143,11 +128,11 @@ void main() {
     float footprint = 1.0;
 #ifdef SVGF_REFLECTION_MOTION
     float roughness = imageLoad(g_metal_rough, px).y;
-    float virtual_weight = 1.0 - smoothstep(VIRTUAL_MOTION_ROUGHNESS.x, VIRTUAL_MOTION_ROUGHNESS.y, roughness);
     float hit = imageLoad(in_hit_distance, px).r;
+    float virtual_weight = reflection_motion_weight(roughness);
     if (hit > 0.0 && virtual_weight > 0.0) {
         vec2 surface_pos = prev_pos;
-        prev_pos = mix(prev_pos, virtual_prev_pos(px, z, hit), virtual_weight);
+        prev_pos = mix(prev_pos, reflection_prev_pos(px, z, hit), virtual_weight);
         fw_tolerance = fw * (1.0 + distance(prev_pos, surface_pos));
     }
     cap = mix(GLOSSY_HISTORY_CAP, cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));

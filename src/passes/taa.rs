@@ -1,13 +1,15 @@
 //! taa: temporal anti-aliasing of the composited HDR frame (shaders-glsl/taa.comp): jittered
 //! G-buffer, Catmull-Rom history, YCoCg neighbourhood clamp, less history the faster the image
-//! moves, history rejected on disocclusion (motion mismatch).
+//! moves, history rejected on disocclusion (motion mismatch), a mirror's history fetched where
+//! the reflected object was.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::gbuffer;
 use super::history::{self, Kept};
+use super::reflections;
 use crate::gpu::vk;
-use crate::graph::{Output, OutputDesc, Preview, Resource};
+use crate::graph::{self, Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
@@ -24,13 +26,18 @@ pub struct Params {
     pub blend: f32,
 }
 
-/// `input` is the HDR image to resolve (bound as `in_color`).
-pub fn new(b: &PassBuilder, input: Resource) -> Result<FullscreenPass> {
+/// `input` is the HDR image to resolve (bound as `in_color`); `reflections`: whether the frame
+/// traces reflection rays, whose hit distance moves a mirror's history with what it reflects.
+pub fn new(b: &PassBuilder, input: Resource, reflections: bool) -> Result<FullscreenPass> {
+    let hit_distance = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
     let inputs = vec![
         Input::texel(input).bound_as("in_color"),
         Input::texel(gbuffer::MOTION),
         Input::texel(history::of(gbuffer::MOTION)),
         Input::filtered(history::of(COLOR)),
+        Input::texel(gbuffer::DEPTH),
+        Input::texel(gbuffer::METAL_ROUGH),
+        if reflections { hit_distance } else { hit_distance.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },
     ];
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
     FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, &Params { blend: BLEND })

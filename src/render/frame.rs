@@ -99,7 +99,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     passes.push(Box::new(passes::composite::new(b, shadows.visibility.into(), diffuse, specular)?));
     let mut hdr_output = passes::composite::COLOR;
     if settings.taa {
-        passes.push(Box::new(passes::taa::new(b, hdr_output.into())?));
+        passes.push(Box::new(passes::taa::new(b, hdr_output.into(), plan.reflections)?));
         kept.extend(passes::taa::kept());
         hdr_output = passes::taa::COLOR;
     }
