@@ -79,9 +79,10 @@ fn add(s: &mut Scene, name: &str, mesh: super::Mesh, at: Vec3) -> u32 {
     s.instances.len() as u32 - 1
 }
 
-/// Adds a checkerboard texture of 8x8 squares, sRGB 230 and 110 (linear albedo 0.79 and 0.16),
-/// sampled nearest; returns its texture index.
-fn add_checker(s: &mut Scene) -> u32 {
+/// A wall material whose albedo is a checkerboard of 8x8 squares, sRGB 230 and 110 (linear
+/// 0.79 and 0.16), sampled nearest and repeated `repeat` times across the wall's UVs; adds the
+/// texture to `s`.
+fn checker_wall(s: &mut Scene, repeat: glam::Vec2) -> Material {
     let size = 32u32;
     let cell = size / 8;
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
@@ -102,7 +103,13 @@ fn add_checker(s: &mut Scene) -> u32 {
             wrap_t: super::Wrap::Repeat,
         },
     });
-    s.textures.len() as u32 - 1
+    let mut wall = diffuse("wall", 1.0);
+    wall.base_color_texture = Some(super::TextureRef {
+        texture: s.textures.len() as u32 - 1,
+        uv_set: 0,
+        transform: glam::Mat3::from_scale(repeat),
+    });
+    wall
 }
 
 /// Facts about `slide` that the suite checks against.
@@ -133,13 +140,7 @@ pub mod slide_facts {
 pub fn slide() -> Scene {
     use slide_facts::*;
     let mut s = Scene { name: "builtin:stability-slide".into(), ..Default::default() };
-    let checker = add_checker(&mut s);
-    let mut wall = diffuse("wall", 1.0);
-    wall.base_color_texture = Some(super::TextureRef {
-        texture: checker,
-        uv_set: 0,
-        transform: glam::Mat3::from_scale(glam::Vec2::new(4.0, 1.5)),
-    });
+    let wall = checker_wall(&mut s, glam::Vec2::new(4.0, 1.5));
     s.materials.push(wall);
     s.materials.push(diffuse("floor", 0.6));
     s.materials.push(diffuse("cube", 0.03));
@@ -453,13 +454,7 @@ pub mod mirror_facts {
 pub fn mirror() -> Scene {
     use mirror_facts::*;
     let mut s = Scene { name: "builtin:stability-mirror".into(), ..Default::default() };
-    let checker = add_checker(&mut s);
-    let mut wall = diffuse("wall", 1.0);
-    wall.base_color_texture = Some(super::TextureRef {
-        texture: checker,
-        uv_set: 0,
-        transform: glam::Mat3::from_scale(glam::Vec2::new(2.0, 0.75)),
-    });
+    let wall = checker_wall(&mut s, glam::Vec2::new(2.0, 0.75));
     s.materials.push(wall);
     s.materials.push(Material {
         name: "mirror".into(),
