@@ -198,8 +198,8 @@ fn curved_surfaces_are_not_faceted() {
         r.render_frame().unwrap();
     }
     let last = hybrid_rt::passes::svgf::SvgfSettings::default().iterations - 1;
-    let diffuse = atrous::COLOR.of(svgf::iteration("diffuse", last));
-    let specular = atrous::COLOR.of(svgf::iteration("specular", last));
+    let diffuse = atrous::DIFFUSE.of(svgf::iteration(atrous::PAIR, last));
+    let specular = atrous::SPECULAR.of(svgf::iteration(atrous::PAIR, last));
     let names = [passes::gbuffer::NORMAL_GEO, passes::gbuffer::IDS, diffuse, specular, passes::taa::COLOR];
     let imgs = r.read_outputs(&names).unwrap();
     let (ng, ids) = (&imgs[0], &imgs[1]);

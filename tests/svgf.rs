@@ -42,9 +42,10 @@ fn atrous(i: u32) -> Output {
     svgf::atrous::COLOR.of(svgf::iteration(TEST_SIGNAL, i))
 }
 
-/// Every luminance weight is 1 and nothing is clamped: only the kernel and geometry act.
+/// Every luminance weight is 1, nothing is clamped and every pixel filtered in every
+/// iteration: only the kernel and geometry act.
 fn no_luminance_stopping() -> SvgfSettings {
-    SvgfSettings { sigma_l: f32::INFINITY, clamp_sigma: f32::INFINITY, ..Default::default() }
+    SvgfSettings { sigma_l: f32::INFINITY, clamp_sigma: f32::INFINITY, converged: 0.0, ..Default::default() }
 }
 
 #[test]

@@ -1,10 +1,11 @@
-// Shared by the SVGF passes (svgf_temporal, svgf_variance, svgf_atrous): settings, the
-// reprojection validity test, and the edge-stopping weights of Schied et al. 2017.
+// Shared by the SVGF passes (svgf_guide, svgf_temporal, svgf_variance, svgf_atrous): settings,
+// the reprojection validity test, the edge-stopping weights of Schied et al. 2017, and the
+// guide texel they read them from.
 #ifndef SVGF_GLSL
 #define SVGF_GLSL
 
 #include "color.glsl"
-
+#include "gbuffer.glsl"
 
 // Settings, one block for every SVGF pass (src/passes/svgf/mod.rs `SvgfSettings`).
 layout(push_constant) uniform SvgfParams {
@@ -15,8 +16,14 @@ layout(push_constant) uniform SvgfParams {
     float sigma_l;        // luminance edge-stopping, scaled by the standard deviation
     float history_cap;    // longest history, frames
     float clamp_sigma;    // outlier clamp: luminance above mean + clamp_sigma * std dev
+    float converged;      // relative noise under which later a-trous iterations leave a pixel as it is
     int step;             // a-trous step (1, 2, 4, ...)
+    uint flags;           // SVGF_SHARP_SPECULAR
 } svgf;
+
+// svgf_atrous: the specular signal is made of reflection rays, and a narrow lobe's reflection
+// keeps its sharpness (svgf_footprint).
+#define SVGF_SHARP_SPECULAR 1u
 
 bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
 
@@ -29,13 +36,14 @@ bool svgf_consistent(float z, float z_prev, float fwidth_z, vec3 ng, vec3 ng_pre
     return dot(ng, ng_prev) > 0.9;
 }
 
-// Depth weight: the difference against how much depth may change over the offset on this
-// pixel's own surface (fwidth from the rasteriser times the offset's length).
-float svgf_weight_depth(float z_p, float z_q, float fwidth_z, float offset_length) {
-    return exp(-abs(z_p - z_q) / (svgf.sigma_z * fwidth_z * offset_length + 1e-4));
-}
+// The edge-stopping weights are exponentials, exp(-e), of these exponents; the a-trous filter
+// adds a tap's exponents and takes one exponential.
 
-// Normal weight on the shading normal (gbuffer.normal: the interpolated vertex normal, with the
+// Depth: the difference against how much depth may change over the offset on this pixel's own
+// surface, `inv_scale` = 1 / (sigma_z fwidth(z) |offset| + 1e-4) (fwidth from the rasteriser).
+float svgf_depth_exponent(float z_p, float z_q, float inv_scale) { return abs(z_p - z_q) * inv_scale; }
+
+// Normal, on the shading normal (gbuffer.normal: the interpolated vertex normal, with the
 // normal map where the material has one), never the face normal: neighbouring faces of a
 // smooth, coarsely tessellated surface differ by several degrees, and with sigma_n 128 the
 // weight across their edge (0.08 at 11 degrees) would filter every triangle on its own and
@@ -43,12 +51,40 @@ float svgf_weight_depth(float z_p, float z_q, float fwidth_z, float offset_lengt
 // normal rather than the bare vertex normal because the demodulated signals are shaded with
 // it (gi.comp, reflections.comp) and composite does not shade them again: filtering across
 // normal-map detail would blur the detail out of the area, environment and indirect light.
-float svgf_weight_normal(vec3 n_p, vec3 n_q) { return pow(max(0.0, dot(n_p, n_q)), svgf.sigma_n); }
+//
+// exp(-sigma_n (1 - n.n')) rather than Schied et al.'s pow(n.n', sigma_n): the two agree to
+// first order where the normals agree (within 2% of each other up to 10 degrees), both are
+// below 1e-7 beyond 30 degrees, and this one needs no logarithm per tap.
+float svgf_normal_exponent(vec3 n_p, vec3 n_q) { return svgf.sigma_n * (1.0 - dot(n_p, n_q)); }
 
-// sigma_l = infinity switches luminance edge-stopping off (the impulse-response test does).
-float svgf_weight_luminance(float l_p, float l_q, float std_dev) {
-    if (isinf(svgf.sigma_l)) return 1.0;
-    return exp(-abs(l_p - l_q) / (svgf.sigma_l * std_dev + 1e-6));
+// Frames of history from which the temporal moments give the variance (svgf_variance estimates
+// it spatially before).
+#define SVGF_MOMENTS_FRAMES 4.0
+
+// Has signal colour `c` (variance in alpha) of a pixel with `history_length` frames converged:
+// is the noise of its accumulated value, estimated as sqrt(variance / frames), below
+// svgf.converged of its luminance? Then the a-trous iterations after the first leave it as it
+// is: the variance is the per-frame sample's, which accumulation does not lower, so the filter
+// would keep averaging a pixel whose history has already averaged the noise away, and only
+// blur it (and cost as much as where it is needed). A pixel whose history is younger than the
+// moments' (a disocclusion, a camera cut, a change of the lights) is never converged.
+bool svgf_converged(vec4 c, float history_length) {
+    return history_length >= SVGF_MOMENTS_FRAMES &&
+           sqrt(max(c.a, 0.0) / history_length) < svgf.converged * luminance(c.rgb);
 }
+
+// How far the a-trous iterations may spread a reflection's light: all the way, but for a narrow
+// lobe, whose reflection is as sharp as what it reflects (from nothing at roughness 0.05 to
+// all of it at 0.35).
+float svgf_footprint(float roughness) { return smoothstep(0.05, 0.35, roughness); }
+
+// What the a-trous weights read of a neighbour, written by svgf_guide into one rgba32f texel so
+// that each of the filter's 24 taps loads one texel instead of three (depth, normal, ids): the
+// shading normal in xyz, the view depth in w, -1 where there is no surface.
+vec4 svgf_guide_pack(float depth, vec3 n, uint instance) {
+    return instance == NO_INSTANCE ? vec4(0.0, 0.0, 1.0, -1.0) : vec4(n, depth);
+}
+
+bool svgf_guide_surface(vec4 guide) { return guide.w >= 0.0; }
 
 #endif

@@ -12,9 +12,8 @@
 // was: the reflection of a point at hit distance d appears at the virtual point p + d view_dir
 // behind a mirror, and a moving camera sees it move with that point's parallax, not the
 // surface's. The lobe's width decides between the two (roughness), and caps the history: a
-// glossy reflection changes with the view even where the reprojection is right. It also
-// narrows the spatial filter's footprint (written in the colour's alpha for svgf_atrous): a
-// mirror's reflection is as sharp as what it reflects.
+// glossy reflection changes with the view even where the reprojection is right. (The same
+// width narrows the a-trous filter's footprint: svgf_footprint.)
 #ifndef SVGF_TEMPORAL_GLSL
 #define SVGF_TEMPORAL_GLSL
 
@@ -93,8 +92,6 @@ vec3 clamp_outlier(ivec2 px, vec3 c) {
 // GLOSSY_CAP_ROUGHNESS.
 const float GLOSSY_HISTORY_CAP = 8.0;
 const float GLOSSY_CAP_ROUGHNESS = 0.5;
-// The spatial filter's footprint grows from nothing at roughness x to all of it at y.
-const vec2 SHARP_ROUGHNESS = vec2(0.05, 0.35);
 #endif
 
 void main() {
@@ -123,9 +120,6 @@ void main() {
     // point's), the previous sample is on the same surface a few pixels off, where depth
     // differs by about fwidth per pixel.
     float fw_tolerance = fw;
-    // How far the a-trous iterations may spread this pixel's light (the colour's alpha): all
-    // the way, but for a narrow lobe, whose reflection is as sharp as what it reflects.
-    float footprint = 1.0;
 #ifdef SVGF_REFLECTION_MOTION
     float roughness = imageLoad(g_metal_rough, px).y;
     float hit = imageLoad(in_hit_distance, px).r;
@@ -136,7 +130,6 @@ void main() {
         fw_tolerance = fw * (1.0 + distance(prev_pos, surface_pos));
     }
     cap = mix(GLOSSY_HISTORY_CAP, cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
-    footprint = smoothstep(SHARP_ROUGHNESS.x, SHARP_ROUGHNESS.y, roughness);
 #endif
     vec2 base = floor(prev_pos - 0.5);
     vec2 f = prev_pos - 0.5 - base;
@@ -170,7 +163,8 @@ void main() {
         c = finite ? mix(hist_c, c, a) : hist_c;
         moments = finite ? mix(hist_m, moments, am) : hist_m;
     }
-    imageStore(out_color, px, vec4(c, footprint));
+    // The alpha is svgf_variance's to fill.
+    imageStore(out_color, px, vec4(c, 0.0));
     imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
     imageStore(out_history_length, px, vec4(len));
 }

@@ -106,7 +106,9 @@ pub fn measure(
 
 /// The terminal table: per size, each pass's wall-clock ms (share) and timestamp ms.
 pub fn table(costs: &[FrameCost]) -> String {
-    let mut s = format!("{:<28}", "pass");
+    // The widest pass name (`svgf_atrous_diffuse_specular_0`) and a space.
+    const NAME: usize = 32;
+    let mut s = format!("{:<NAME$}", "pass");
     for c in costs {
         s.push_str(&format!(" {:>22} {:>10}", format!("{}x{} ms (share)", c.width, c.height), "timestamp"));
     }
@@ -114,7 +116,7 @@ pub fn table(costs: &[FrameCost]) -> String {
     let passes: Vec<&str> =
         costs.first().map(|c| c.passes.iter().map(|p| p.pass.as_str()).collect()).unwrap_or_default();
     for p in passes {
-        s.push_str(&format!("{p:<28}"));
+        s.push_str(&format!("{p:<NAME$}"));
         for c in costs {
             let cost = c.passes.iter().find(|x| x.pass == p);
             let cell = cost.map(|x| format!("{:.2} ({:.1}%)", x.ms, 100.0 * x.share)).unwrap_or_default();
@@ -123,17 +125,17 @@ pub fn table(costs: &[FrameCost]) -> String {
         }
         s.push('\n');
     }
-    s.push_str(&format!("{:<28}", "svgf_* (denoiser) total"));
+    s.push_str(&format!("{:<NAME$}", "svgf_* (denoiser) total"));
     for c in costs {
         s.push_str(&format!(" {:>22} {:>10}", format!("{:.2} ({:.1}%)", c.svgf_ms, 100.0 * c.svgf_share), ""));
     }
     s.push('\n');
-    s.push_str(&format!("{:<28}", "passes total"));
+    s.push_str(&format!("{:<NAME$}", "passes total"));
     for c in costs {
         s.push_str(&format!(" {:>22} {:>10}", format!("{:.2}", c.total_ms), format!("{:.2}", c.timestamps_ms)));
     }
     s.push('\n');
-    s.push_str(&format!("{:<28}", "frame (one submission)"));
+    s.push_str(&format!("{:<NAME$}", "frame (one submission)"));
     for c in costs {
         s.push_str(&format!(" {:>22} {:>10}", format!("{:.2}", c.wall_ms), ""));
     }

@@ -1,7 +1,8 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
-//! gbuffer -> [primary_rays] -> shadows chain -> [radiance_cache] -> gi -> reflections -> [svgf
-//! chains: diffuse on gi, specular on reflections] -> composite -> [taa] -> tonemap -> history.
+//! gbuffer -> [primary_rays] -> shadows chain -> [radiance_cache] -> gi -> reflections ->
+//! [svgf_guide, svgf chains: diffuse on gi, specular on reflections, filtered together] ->
+//! composite -> [taa] -> tonemap -> history.
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
 
 use super::Settings;
@@ -76,22 +77,21 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         gi_specular
     };
     let mut diffuse = gi_diffuse;
+    if settings.denoiser || settings.test_signal {
+        passes.push(Box::new(svgf::guide::new(b)?));
+    }
     if settings.denoiser {
         // The specular signal of reflection rays follows what they hit when the camera moves.
         let hit_distance = plan.reflections.then_some(passes::reflections::HIT_DISTANCE.into());
-        for (signal, input, hit_distance) in
-            [("diffuse", &mut diffuse, None), ("specular", &mut specular, hit_distance)]
-        {
-            let chain = svgf::chain(b, signal, *input, hit_distance, &settings.denoise)?;
-            passes.extend(chain.passes);
-            kept.extend(chain.kept);
-            *input = chain.output.into();
-        }
+        let chain = svgf::pair(b, diffuse, specular, hit_distance, &settings.denoise)?;
+        passes.extend(chain.passes);
+        kept.extend(chain.kept);
+        (diffuse, specular) = (chain.outputs[0].into(), chain.outputs[1].into());
     }
     if settings.test_signal {
         let (pass, texels) = inject::new(b.ctx, TEST_INPUT, extent)?;
         passes.push(Box::new(pass));
-        let chain = svgf::chain(b, TEST_SIGNAL, TEST_INPUT.into(), None, &settings.denoise)?;
+        let chain = svgf::single(b, TEST_SIGNAL, TEST_INPUT.into(), &settings.denoise)?;
         passes.extend(chain.passes);
         kept.extend(chain.kept);
         injected.insert(TEST_INPUT, texels);

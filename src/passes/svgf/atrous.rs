@@ -1,7 +1,10 @@
-//! svgf_atrous_<signal>_<i>: iteration i of the edge-avoiding a-trous filter, step 2^i
-//! (shaders-glsl/svgf_atrous.comp).
+//! svgf_atrous: iteration i of the edge-avoiding a-trous filter, step 2^i
+//! (shaders-glsl/common/svgf_atrous.glsl). The frame's diffuse and specular signals are filtered
+//! together, `svgf_atrous_diffuse_specular_<i>` (svgf_atrous_diffuse_specular.comp), sharing
+//! each tap's guide texel and depth and normal weights; any other signal on its own,
+//! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
-use super::{SvgfSettings, iteration, temporal, variance};
+use super::{SvgfSettings, guide, iteration, temporal, variance};
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
@@ -10,29 +13,57 @@ use crate::passes::gbuffer;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_atrous";
-/// The filtered colour (of one run: `COLOR.of(svgf::iteration(signal, i))`).
+/// The run name of the pair's iterations (`svgf_atrous_diffuse_specular_0`).
+pub const PAIR: &str = "diffuse_specular";
+/// A lone signal's filtered colour, variance in alpha (`COLOR.of(svgf::iteration(signal, i))`).
 pub const COLOR: Output = Output::new(NAME, "color");
-/// The filtered variance.
-pub const VARIANCE: Output = Output::new(NAME, "variance");
+/// The pair's filtered diffuse signal, variance in alpha (`DIFFUSE.of(svgf::iteration(PAIR, i))`).
+pub const DIFFUSE: Output = Output::new(NAME, "diffuse");
+/// The pair's filtered specular signal, variance in alpha.
+pub const SPECULAR: Output = Output::new(NAME, "specular");
 
-pub fn new(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -> Result<FullscreenPass> {
-    let (color, variance) = if i == 0 {
-        (temporal::COLOR.of(super::signal(signal)), variance::VARIANCE.of(super::signal(signal)))
-    } else {
-        (COLOR.of(iteration(signal, i - 1)), VARIANCE.of(iteration(signal, i - 1)))
-    };
+/// Iteration `i` of one signal.
+pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -> Result<FullscreenPass> {
+    let color = if i == 0 { variance::COLOR.of(super::signal(signal)) } else { COLOR.of(iteration(signal, i - 1)) };
+    let run = iteration(signal, i);
     let inputs = vec![
         Input::texel(color),
-        Input::texel(variance),
+        Input::texel(temporal::HISTORY_LENGTH.of(super::signal(signal))),
+        Input::texel(guide::GUIDE),
         Input::texel(gbuffer::DEPTH),
-        Input::texel(gbuffer::NORMAL),
-        Input::texel(gbuffer::IDS),
     ];
-    let run = iteration(signal, i);
-    let outputs = vec![
-        OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(VARIANCE.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
-    ];
-    let push = s.push_constants(1 << i);
+    let outputs = vec![OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    let push = s.push_constants(1 << i, 0);
     FullscreenPass::new(b, &COLOR.of(run).pass_name(), "svgf_atrous.comp", inputs, outputs, &push)
 }
+
+/// Iteration `i` of the frame's diffuse and specular signals. `sharp_specular`: the specular
+/// signal is made of reflection rays, whose narrow lobes keep their sharpness.
+pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> Result<FullscreenPass> {
+    let (diffuse, specular) = if i == 0 {
+        (variance::COLOR.of(super::signal("diffuse")), variance::COLOR.of(super::signal("specular")))
+    } else {
+        (DIFFUSE.of(iteration(PAIR, i - 1)), SPECULAR.of(iteration(PAIR, i - 1)))
+    };
+    let inputs = vec![
+        Input::texel(diffuse).bound_as("in_diffuse"),
+        Input::texel(specular).bound_as("in_specular"),
+        Input::texel(temporal::HISTORY_LENGTH.of(super::signal("diffuse"))).bound_as("in_diffuse_history_length"),
+        Input::texel(temporal::HISTORY_LENGTH.of(super::signal("specular"))).bound_as("in_specular_history_length"),
+        Input::texel(guide::GUIDE),
+        Input::texel(gbuffer::DEPTH),
+        Input::texel(gbuffer::METAL_ROUGH),
+    ];
+    let run = iteration(PAIR, i);
+    let outputs = vec![
+        OutputDesc::storage(DIFFUSE.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(SPECULAR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+    ];
+    let flags = if sharp_specular { SHARP_SPECULAR } else { 0 };
+    let push = s.push_constants(1 << i, flags);
+    let shader = "svgf_atrous_diffuse_specular.comp";
+    FullscreenPass::new(b, &DIFFUSE.of(run).pass_name(), shader, inputs, outputs, &push)
+}
+
+/// common/svgf.glsl's SVGF_SHARP_SPECULAR.
+const SHARP_SPECULAR: u32 = 1;

@@ -1,13 +1,17 @@
 //! SVGF (Schied et al. 2017, with Falcor's defaults): spatiotemporal variance-guided filtering
-//! of one demodulated signal, as a chain of passes:
+//! of demodulated signals, as a chain of passes. The frame's diffuse and specular signals:
 //!
-//! `svgf_temporal_<signal>` -> `svgf_variance_<signal>` -> `svgf_atrous_<signal>_0` ... `_<n-1>`
+//! `svgf_temporal_<signal>` -> `svgf_variance_<signal>` (each signal) ->
+//! `svgf_atrous_diffuse_specular_0` ... `_<n-1>` (both at once)
 //!
-//! Each stage is a pass instance with its own named outputs, so `--dump-passes` shows the chain
-//! step by step. The first a-trous iteration's colour, and the temporal moments and history
-//! length, are kept for the next frame by the `history` pass.
+//! and a lone signal (the tests' injected one) the same with `svgf_atrous_<signal>_<i>`. Each
+//! stage is a pass instance with its own named outputs, so `--dump-passes` shows the chain step
+//! by step. The first a-trous iteration's colour, and the temporal moments and history length,
+//! are kept for the next frame by the `history` pass. `svgf_guide` packs what the a-trous
+//! weights read of the G-buffer once per frame; the frame runs it before the chains.
 
 pub mod atrous;
+pub mod guide;
 pub mod temporal;
 pub mod variance;
 
@@ -17,6 +21,9 @@ use crate::gpu::vk;
 use crate::graph::{Instance, Output, Pass, Preview, Resource};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
+
+/// The default of `SvgfSettings::converged`.
+const CONVERGED: f32 = 0.05;
 
 /// The named settings of the filter. Defaults follow Falcor's SVGFPass (iterations 4,
 /// phiColor 10, phiNormal 128, alpha 0.05, momentsAlpha 0.2, history capped at 32) and the
@@ -40,6 +47,10 @@ pub struct SvgfSettings {
     /// Outliers: input luminance is clamped to mean + this many standard deviations of its
     /// 7x7 neighbourhood (the centre excluded) before anything accumulates it.
     pub clamp_sigma: f32,
+    /// Converged: a-trous iterations after the first leave a signal's pixel as it is where the
+    /// estimated noise of its accumulated value, sqrt(variance / history length), is below
+    /// this fraction of its luminance; 0 filters every pixel in every iteration.
+    pub converged: f32,
 }
 
 impl Default for SvgfSettings {
@@ -53,6 +64,7 @@ impl Default for SvgfSettings {
             sigma_l: 10.0,
             history_cap: 32.0,
             clamp_sigma: 4.0,
+            converged: CONVERGED,
         }
     }
 }
@@ -68,11 +80,13 @@ pub struct Params {
     pub sigma_l: f32,
     pub history_cap: f32,
     pub clamp_sigma: f32,
+    pub converged: f32,
     pub step: i32,
+    pub flags: u32,
 }
 
 impl SvgfSettings {
-    fn push_constants(&self, step: i32) -> Params {
+    fn push_constants(&self, step: i32, flags: u32) -> Params {
         Params {
             alpha: self.alpha,
             moments_alpha: self.moments_alpha,
@@ -81,15 +95,18 @@ impl SvgfSettings {
             sigma_l: self.sigma_l,
             history_cap: self.history_cap,
             clamp_sigma: self.clamp_sigma,
+            converged: self.converged,
             step,
+            flags,
         }
     }
 }
 
-/// A built chain: its passes in order, the filtered output, and what it keeps.
+/// A built chain: its passes in order, the filtered outputs (one per signal, in the order
+/// given), and what it keeps.
 pub struct Chain {
     pub passes: Vec<Box<dyn Pass>>,
-    pub output: Output,
+    pub outputs: Vec<Output>,
     pub kept: Vec<Kept>,
 }
 
@@ -99,31 +116,62 @@ pub const fn signal(signal: &'static str) -> Instance {
     Instance { signal: Some(signal), iteration: None }
 }
 
-/// A-trous iteration `i` of the chain of `signal` (`svgf_atrous_diffuse_0`).
+/// A-trous iteration `i` of the chain of `signal`, or of the pair (`svgf_atrous_diffuse_0`,
+/// `svgf_atrous_diffuse_specular_0`).
 pub const fn iteration(signal: &'static str, i: u32) -> Instance {
     Instance { signal: Some(signal), iteration: Some(i) }
 }
 
-/// The chain filtering `input` (a demodulated RGBA32F signal) under the name `signal`;
-/// `hit_distance` for a signal of reflection rays (see [`temporal::new`]).
-pub fn chain(
+/// The frame's chains: the demodulated RGBA32F `diffuse` and `specular` signals, filtered
+/// together by the a-trous iterations. `hit_distance` when the specular signal is made of
+/// reflection rays (see [`temporal::new`]); their narrow lobes then also keep their sharpness.
+pub fn pair(
     b: &PassBuilder,
-    signal: &'static str,
-    input: Resource,
+    diffuse: Resource,
+    specular: Resource,
     hit_distance: Option<Resource>,
     s: &SvgfSettings,
 ) -> Result<Chain> {
     let iterations = s.iterations.max(1);
-    let mut passes: Vec<Box<dyn Pass>> =
-        vec![Box::new(temporal::new(b, signal, input, hit_distance, s)?), Box::new(variance::new(b, signal, s)?)];
-    for i in 0..iterations {
-        passes.push(Box::new(atrous::new(b, signal, i, s)?));
+    let first = iteration(atrous::PAIR, 0);
+    let signals = [
+        ("diffuse", diffuse, atrous::DIFFUSE.of(first), None),
+        ("specular", specular, atrous::SPECULAR.of(first), hit_distance),
+    ];
+    let mut passes: Vec<Box<dyn Pass>> = Vec::new();
+    let mut kept = Vec::new();
+    for (name, input, filtered, hit_distance) in signals {
+        passes.push(Box::new(temporal::new(b, name, input, filtered, hit_distance, s)?));
+        passes.push(Box::new(variance::new(b, name, s)?));
+        kept.extend(keep(name, filtered));
     }
+    for i in 0..iterations {
+        passes.push(Box::new(atrous::pair(b, i, hit_distance.is_some(), s)?));
+    }
+    let last = iteration(atrous::PAIR, iterations - 1);
+    Ok(Chain { passes, outputs: vec![atrous::DIFFUSE.of(last), atrous::SPECULAR.of(last)], kept })
+}
+
+/// The chain of one demodulated RGBA32F signal, `input`, under the name `signal`.
+pub fn single(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSettings) -> Result<Chain> {
+    let iterations = s.iterations.max(1);
+    let filtered = atrous::COLOR.of(iteration(signal, 0));
+    let mut passes: Vec<Box<dyn Pass>> =
+        vec![Box::new(temporal::new(b, signal, input, filtered, None, s)?), Box::new(variance::new(b, signal, s)?)];
+    for i in 0..iterations {
+        passes.push(Box::new(atrous::single(b, signal, i, s)?));
+    }
+    let outputs = vec![atrous::COLOR.of(iteration(signal, iterations - 1))];
+    Ok(Chain { passes, outputs, kept: keep(signal, filtered).to_vec() })
+}
+
+/// What the next frame's temporal stage of `signal` reprojects: the first a-trous colour, the
+/// moments, the history length.
+fn keep(signal: &'static str, filtered: Output) -> [Kept; 3] {
     let run = self::signal(signal);
-    let kept = vec![
-        Kept::new(atrous::COLOR.of(iteration(signal, 0)), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+    [
+        Kept::new(filtered, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         Kept::new(temporal::MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
         Kept::new(temporal::HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
-    ];
-    Ok(Chain { passes, output: atrous::COLOR.of(iteration(signal, iterations - 1)), kept })
+    ]
 }

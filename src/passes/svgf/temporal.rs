@@ -3,7 +3,7 @@
 //! reflections pass reprojects a narrow lobe's history from the reflected object's virtual
 //! position instead (svgf_temporal_specular.comp, common/svgf_temporal.glsl).
 
-use super::{SvgfSettings, atrous, iteration, signal};
+use super::{SvgfSettings, signal};
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview, Resource};
 use crate::passes::PassBuilder;
@@ -22,13 +22,16 @@ pub const HISTORY_LENGTH: Output = Output::new(NAME, "history_length");
 /// Non-finite input samples caught since the first frame (texel 0,0).
 pub const REJECTED: Output = Output::new(NAME, "rejected");
 
-/// `input` is the signal to filter (bound as `in_signal`). `hit_distance`, where the signal is
-/// made of reflection rays (`reflections::HIT_DISTANCE`): their mean hit distance, which moves
-/// a narrow lobe's history with the reflected object rather than the surface.
+/// `input` is the signal to filter (bound as `in_signal`); `filtered`, the chain's first
+/// a-trous output for this signal, whose previous frame is the colour history. `hit_distance`,
+/// where the signal is made of reflection rays (`reflections::HIT_DISTANCE`): their mean hit
+/// distance, which moves a narrow lobe's history with the reflected object rather than the
+/// surface.
 pub fn new(
     b: &PassBuilder,
     signal_name: &'static str,
     input: Resource,
+    filtered: Output,
     hit_distance: Option<Resource>,
     s: &SvgfSettings,
 ) -> Result<FullscreenPass> {
@@ -42,7 +45,7 @@ pub fn new(
         Input::texel(history::of(gbuffer::DEPTH)),
         Input::texel(history::of(gbuffer::NORMAL_GEO)),
         Input::texel(history::of(gbuffer::IDS)),
-        Input::texel(history::of(atrous::COLOR.of(iteration(signal_name, 0)))),
+        Input::texel(history::of(filtered)).bound_as("prev_color"),
         Input::texel(history::of(MOMENTS.of(run))),
         Input::texel(history::of(HISTORY_LENGTH.of(run))),
     ];
@@ -57,6 +60,6 @@ pub fn new(
         OutputDesc::storage(HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
         OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
     ];
-    let push = s.push_constants(0);
+    let push = s.push_constants(0, 0);
     FullscreenPass::new(b, &COLOR.of(run).pass_name(), &shader, inputs, outputs, &push)
 }
