@@ -391,62 +391,7 @@ fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::sweep::{PathTracerPoint, Point, ReferenceInfo, ReferenceMade};
-
-    fn sweep(points: &[(&str, f64, f64, bool)]) -> SceneSweep {
-        let made = ReferenceMade {
-            scene: "s.gltf".into(),
-            scene_hash: "0".into(),
-            camera: "default".into(),
-            width: 320,
-            height: 180,
-            spp: 512,
-            max_bounces: 256,
-            seeds: [1, 2],
-            noise_flip: 0.021,
-            render_seconds: 1.0,
-            backend: "compute".into(),
-            device: "test device".into(),
-        };
-        let points: Vec<Point> = points
-            .iter()
-            .map(|&(name, frame_ms, flip, pareto)| Point {
-                name: name.into(),
-                config: name.parse().unwrap(),
-                frame_ms,
-                frame_ms_samples: vec![frame_ms],
-                timestamp_ms: frame_ms,
-                passes: Vec::new(),
-                flip,
-                psnr_db: Some(30.0),
-                ssim: 0.9,
-                pareto,
-                seconds: 1.0,
-            })
-            .collect();
-        SceneSweep {
-            scene: "s.gltf".into(),
-            scene_name: "test scene".into(),
-            scene_hash: "0".into(),
-            camera: "default".into(),
-            width: 320,
-            height: 180,
-            backend: "compute".into(),
-            device: "test device".into(),
-            driver: "test driver".into(),
-            frames: 48,
-            timed_frames: 8,
-            rounds: 1,
-            reference: ReferenceInfo { path: "r.exr".into(), cached: false, seconds: 1.0, made },
-            pareto_front: points.iter().filter(|p| p.pareto).map(|p| p.name.clone()).collect(),
-            points,
-            path_tracer: [(1, 9.0, 0.5), (2, 18.0, 0.36), (4, 36.0, 0.25), (8, 72.0, 0.18)]
-                .iter()
-                .map(|&(spp, ms, flip)| PathTracerPoint { spp, ms, flip })
-                .collect(),
-            seconds: 1.0,
-        }
-    }
+    use crate::bench::sweep::testing::sweep;
 
     #[test]
     fn writes_png_and_svg_with_the_labels() {

@@ -137,6 +137,11 @@ pub struct Point {
     pub passes: Vec<PassMs>,
     /// HDR-FLIP against the reference (mean over pixels; 0 = identical).
     pub flip: f64,
+    /// HDR-FLIP of one more frame after a camera cut at the end of the run, the same view:
+    /// what the frame shows without SVGF's and TAA's history (the radiance cache keeps its
+    /// cells, as it does on a cut). Absent in sweeps cached before it was measured.
+    #[serde(default)]
+    pub cut_flip: Option<f64>,
     /// PSNR (dB) after ACES + sRGB; absent when the images are identical (infinite).
     pub psnr_db: Option<f64>,
     /// SSIM after ACES + sRGB.
@@ -332,9 +337,13 @@ struct Run {
     stamps: Vec<f64>,
     per_pass: Vec<(String, Vec<f64>)>,
     last_frame: CpuImage,
+    /// With `cut`: the frame after a camera cut that follows the run.
+    after_cut: Option<CpuImage>,
 }
 
-/// Renders `opts.frames` frames of one configuration, timing the last `timed_frames`.
+/// Renders `opts.frames` frames of one configuration, timing the last `timed_frames`; with
+/// `cut`, then a camera cut and one frame more (untimed).
+#[allow(clippy::too_many_arguments)]
 fn run_config(
     ctx: &std::sync::Arc<Context>,
     shaders: &ShaderLibrary,
@@ -342,6 +351,7 @@ fn run_config(
     backend: Backend,
     opts: &Options,
     config: Config,
+    cut: bool,
     bar: &indicatif::ProgressBar,
 ) -> Result<Run> {
     let mut settings = Settings {
@@ -372,15 +382,26 @@ fn run_config(
         }
     }
     let last_frame = r.read_output(r.hdr_output())?;
-    Ok(Run { totals, stamps, per_pass, last_frame })
+    let after_cut = if cut {
+        r.camera_cut();
+        r.render_frame()?;
+        Some(r.read_output(r.hdr_output())?)
+    } else {
+        None
+    };
+    Ok(Run { totals, stamps, per_pass, last_frame, after_cut })
 }
 
 /// Measures one configuration's error (and first round's times) from its first run.
 fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Result<Point> {
-    let Run { totals, stamps, per_pass, last_frame: img } = run;
+    let Run { totals, stamps, per_pass, last_frame: img, after_cut } = run;
     let name = config.to_string();
     let flip =
         metrics::hdr_flip(reference, &img, &HdrFlipOptions::default()).with_context(|| format!("{name}: FLIP"))?;
+    let cut_flip = after_cut
+        .map(|cut| metrics::hdr_flip(reference, &cut, &HdrFlipOptions::default()))
+        .transpose()
+        .with_context(|| format!("{name}: FLIP after the cut"))?;
     let display = DisplayTransform::AcesSrgb { exposure: 0.0 };
     let psnr = metrics::psnr_display(reference, &img, display).with_context(|| format!("{name}: PSNR"))?;
     let ssim = metrics::ssim_with(reference, &img, display).with_context(|| format!("{name}: SSIM"))?;
@@ -392,6 +413,7 @@ fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Resu
         timestamp_ms: median(&stamps),
         passes: per_pass.into_iter().map(|(pass, v)| PassMs { pass, ms: median(&v) }).collect(),
         flip: flip.mean,
+        cut_flip: cut_flip.map(|f| f.mean),
         psnr_db: psnr.is_finite().then_some(psnr),
         ssim,
         pareto: false,
@@ -429,7 +451,7 @@ pub fn sweep_scene(
         for (i, &config) in opts.configs.iter().enumerate() {
             bar.set_message(format!("{config} (round {}/{rounds})", round + 1));
             let run_start = Instant::now();
-            let run = run_config(ctx, shaders, scene, backend, opts, config, &bar)?;
+            let run = run_config(ctx, shaders, scene, backend, opts, config, round == 0, &bar)?;
             if round == 0 {
                 let p = measure(config, run, &reference, run_start.elapsed().as_secs_f64())?;
                 log::info!("{}: {:.2} ms, FLIP {:.4}", p.name, p.frame_ms, p.flip);
@@ -481,4 +503,68 @@ pub fn sweep_scene(
     );
     image_io::write_atomic(&cache, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&sweep)?)?))?;
     Ok(sweep)
+}
+
+/// A made-up sweep for the unit tests of what reads one (chart, report).
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::*;
+
+    /// A sweep of `points` (name, frame ms, FLIP, on the front) with a path-tracer curve of
+    /// 1 to 8 spp, its 1-spp FLIP 0.5.
+    pub fn sweep(points: &[(&str, f64, f64, bool)]) -> SceneSweep {
+        let made = ReferenceMade {
+            scene: "s.gltf".into(),
+            scene_hash: "0".into(),
+            camera: "default".into(),
+            width: 320,
+            height: 180,
+            spp: 512,
+            max_bounces: 256,
+            seeds: [1, 2],
+            noise_flip: 0.021,
+            render_seconds: 1.0,
+            backend: "compute".into(),
+            device: "test device".into(),
+        };
+        let points: Vec<Point> = points
+            .iter()
+            .map(|&(name, frame_ms, flip, pareto)| Point {
+                name: name.into(),
+                config: name.parse().unwrap(),
+                frame_ms,
+                frame_ms_samples: vec![frame_ms],
+                timestamp_ms: frame_ms,
+                passes: Vec::new(),
+                flip,
+                cut_flip: None,
+                psnr_db: Some(30.0),
+                ssim: 0.9,
+                pareto,
+                seconds: 1.0,
+            })
+            .collect();
+        SceneSweep {
+            scene: "s.gltf".into(),
+            scene_name: "test scene".into(),
+            scene_hash: "0".into(),
+            camera: "default".into(),
+            width: 320,
+            height: 180,
+            backend: "compute".into(),
+            device: "test device".into(),
+            driver: "test driver".into(),
+            frames: 48,
+            timed_frames: 8,
+            rounds: 1,
+            reference: ReferenceInfo { path: "r.exr".into(), cached: false, seconds: 1.0, made },
+            pareto_front: points.iter().filter(|p| p.pareto).map(|p| p.name.clone()).collect(),
+            points,
+            path_tracer: [(1, 9.0, 0.5), (2, 18.0, 0.36), (4, 36.0, 0.25), (8, 72.0, 0.18)]
+                .iter()
+                .map(|&(spp, ms, flip)| PathTracerPoint { spp, ms, flip })
+                .collect(),
+            seconds: 1.0,
+        }
+    }
 }

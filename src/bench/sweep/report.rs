@@ -34,16 +34,17 @@ pub fn table(s: &SceneSweep) -> String {
         s.reference.made.noise_flip
     );
     t += &format!(
-        "  {:<18} {:>9} {:>9} {:>8} {:>9} {:>7} {:>14}\n",
-        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM", "PT FLIP @time"
+        "  {:<18} {:>9} {:>9} {:>8} {:>9} {:>7} {:>14} {:>9}\n",
+        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM", "PT FLIP @time", "FLIP cut"
     );
     let mut order: Vec<&Point> = s.points.iter().collect();
     order.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     for p in order {
         let psnr = p.psnr_db.map_or("inf".to_string(), |v| format!("{v:.2}"));
         let pt = path_tracer_flip_at(s, s.frames as f64 * p.frame_ms).map_or("-".to_string(), |f| format!("{f:.4}"));
+        let cut = p.cut_flip.map_or("-".to_string(), |f| format!("{f:.4}"));
         t += &format!(
-            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4} {:>14}\n",
+            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4} {:>14} {:>9}\n",
             if p.pareto { "*" } else { " " },
             p.name,
             p.frame_ms,
@@ -51,13 +52,16 @@ pub fn table(s: &SceneSweep) -> String {
             p.flip,
             psnr,
             p.ssim,
-            pt
+            pt,
+            cut
         );
     }
     if !s.path_tracer.is_empty() {
         t += &format!(
             "  PT FLIP @time: the path tracer's error after the time {} frames of the configuration took \
-             (static camera; '-' beyond its curve)\n  path tracer (progressive, same reference):\n",
+             (static camera; '-' beyond its curve)\n  FLIP cut: the frame after a camera cut at the end of \
+             the run (no SVGF or TAA history; the radiance cache keeps its cells)\n  path tracer \
+             (progressive, same reference):\n",
             s.frames
         );
         for p in &s.path_tracer {
@@ -72,6 +76,15 @@ pub fn table(s: &SceneSweep) -> String {
                 d.frame_ms / one.ms * one.spp as f64,
                 one.ms / one.spp as f64
             );
+            if let (Some(cut), 1) = (d.cut_flip, one.spp) {
+                t += &format!(
+                    "  the first frame of {} after a camera cut: FLIP {:.4}, {:.2}x the path tracer's at 1 spp ({:.4})\n",
+                    d.name,
+                    cut,
+                    cut / one.flip,
+                    one.flip
+                );
+            }
         }
     }
     for full in s.points.iter().filter(|p| p.config.full) {
@@ -95,4 +108,24 @@ pub fn table(s: &SceneSweep) -> String {
         }
     }
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::sweep::testing::sweep;
+
+    #[test]
+    fn the_first_frame_after_a_cut_is_set_against_one_path_traced_sample() {
+        let mut s = sweep(&[("d0-s5-b1-r1", 10.0, 0.3, true), ("d4-s5-b1-r1", 12.0, 0.1, true)]);
+        s.points[1].cut_flip = Some(0.2);
+        let t = table(&s);
+        assert!(t.contains("FLIP cut"), "{t}");
+        let row = t.lines().find(|l| l.contains("d4-s5-b1-r1") && l.contains("0.1000")).expect("the default's row");
+        assert!(row.trim_end().ends_with("0.2000"), "{row}");
+        // A point measured without a cut shows none.
+        let row = t.lines().find(|l| l.contains("d0-s5-b1-r1")).expect("the other row");
+        assert!(row.trim_end().ends_with('-'), "{row}");
+        assert!(t.contains("after a camera cut: FLIP 0.2000, 0.40x the path tracer's at 1 spp (0.5000)"), "{t}");
+    }
 }
