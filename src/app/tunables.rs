@@ -206,6 +206,15 @@ pub static ALL: &[Tunable] = &[
         |s| s.denoise.clamp_sigma,
         f32
     ),
+    tunable!(
+        "converged",
+        "Denoiser",
+        "later a-trous iterations skip noise under this fraction",
+        float(0.0, 0.5, false),
+        true,
+        |s| s.denoise.converged,
+        f32
+    ),
 ];
 
 pub fn find(name: &str) -> Option<&'static Tunable> {

@@ -116,7 +116,7 @@ pub const fn signal(signal: &'static str) -> Instance {
     Instance { signal: Some(signal), iteration: None }
 }
 
-/// A-trous iteration `i` of the chain of `signal`, or of the pair (`svgf_atrous_diffuse_0`,
+/// A-trous iteration `i` of the chain of `signal`, or of the pair (`svgf_atrous_signal_0`,
 /// `svgf_atrous_diffuse_specular_0`).
 pub const fn iteration(signal: &'static str, i: u32) -> Instance {
     Instance { signal: Some(signal), iteration: Some(i) }
