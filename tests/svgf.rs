@@ -4,6 +4,7 @@
 //! - a signal edge that coincides with a geometric edge does not leak;
 //! - NaN/Inf never enter the history (and are counted), fireflies are clamped;
 //! - history restarts on disocclusion and on a camera cut;
+//! - converged pixels skip the a-trous iterations after the first;
 //! - noise falls with accumulated frames, by stated factors.
 
 mod common;
@@ -190,5 +191,40 @@ fn history_restarts_on_disocclusion_and_camera_cut() {
     let longest = (0..W * H).map(|i| len.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
     assert_eq!(longest, 1.0, "after a camera cut every history restarts");
     drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+/// Iterations after the first leave converged pixels as they are (`SvgfSettings::converged`):
+/// a signal that does not change over time has no variance, so once its history is 4 frames
+/// old iterations 1.. pass every surface pixel through untouched, while with `converged` 0
+/// they keep blurring it. (No luminance stopping, so that only the skip can keep the pattern.)
+#[test]
+fn converged_pixels_skip_the_later_iterations() {
+    let ctx = common::validated_context();
+    let pattern: Vec<[f32; 4]> = (0..W * H)
+        .map(|i| if ((i % W) / 2 + (i / W) / 2) % 2 == 0 { [1.0; 4] } else { [0.2, 0.2, 0.2, 1.0] })
+        .collect();
+    for converged in [SvgfSettings::default().converged, 0.0] {
+        let mut r = renderer_with(&ctx, SvgfSettings { converged, ..no_luminance_stopping() }, 0.0);
+        r.inject(INPUT, pattern.clone()).unwrap();
+        for _ in 0..6 {
+            r.render_frame().unwrap();
+        }
+        let imgs = r.read_outputs(&[atrous(0), atrous(3), passes::gbuffer::IDS]).unwrap();
+        let mut change = 0.0f32;
+        for y in 0..H {
+            for x in 0..W {
+                if imgs[2].get_u32(x, y, 0) != u32::MAX {
+                    change = change.max((imgs[0].get(x, y, 0) - imgs[1].get(x, y, 0)).abs());
+                }
+            }
+        }
+        eprintln!("converged {converged}: largest change from iteration 0 to 3: {change}");
+        if converged > 0.0 {
+            assert_eq!(change, 0.0, "converged pixels were filtered again");
+        } else {
+            assert!(change > 0.05, "with converged 0 the later iterations should blur the pattern: {change}");
+        }
+    }
     common::assert_validation_clean(ctx);
 }
