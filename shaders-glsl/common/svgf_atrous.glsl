@@ -6,9 +6,9 @@
 // squares, so the next iteration stops at the right edges.
 //
 // The pair filters diffuse and specular in one dispatch: each tap's guide texel (depth, normal,
-// instance; svgf_guide) is loaded and its depth and normal weights computed once for both, and
-// the filter costs little more than one signal's. A reflection signal's footprint narrows
-// with the roughness (svgf_footprint): a mirror's reflection stays sharp.
+// whether there is a surface; svgf_guide) is loaded and its depth and normal weights computed
+// once for both, and the filter costs little more than one signal's. A reflection signal's
+// footprint narrows with the roughness (svgf_footprint): a mirror's reflection stays sharp.
 #ifndef SVGF_ATROUS_GLSL
 #define SVGF_ATROUS_GLSL
 
