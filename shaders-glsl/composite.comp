@@ -1,11 +1,11 @@
 #version 460
 // composite: the hybrid frame in linear HDR radiance. Per G-buffer pixel:
 //   emission
-// + punctual lights (Lambert + GGX) times their ray-traced visibility (shadows_filter, first
-//   four lights; the rest unshadowed)
-// + the diffuse signal (gi: emitters, environment, one bounce; demodulated) times the diffuse
-//   albedo
-// + the specular signal (reflections).
+// + the first SHADOWED_LIGHTS punctual lights (Lambert + GGX) times their ray-traced
+//   visibility (the shadows chain, one channel each)
+// + the diffuse signal (gi: emitters, environment, the other punctual lights resampled, every
+//   bounce; demodulated) times the diffuse albedo
+// + the specular signal (reflections, with gi's specular lobe of the resampled lights).
 // Pixels that hit nothing show the environment.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
@@ -44,10 +44,9 @@ void main() {
 
     vec4 vis = imageLoad(in_visibility, px);
     vec3 radiance = imageLoad(g_emissive, px).rgb;
-    for (uint i = 0u; i < frame.light_count; ++i) {
+    for (uint i = 0u; i < min(frame.light_count, SHADOWED_LIGHTS); ++i) {
         LightSample ls = sample_punctual(lights[i], p);
-        float v_i = i < 4u ? vis[i] : 1.0;
-        radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * v_i;
+        radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * vis[i];
     }
     // The diffuse signal is the lobe without its albedo (gi.comp).
     radiance += brdf_diffuse_albedo(m) * imageLoad(in_diffuse, px).rgb;

@@ -15,6 +15,12 @@
 //   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
 //   chosen) and the bounce ray hitting an emitter or escaping, combined with the power
 //   heuristic;
+// - direct light from the punctual lights past the first SHADOWED_LIGHTS (composite shades those
+//   with the shadows chain's visibility): one light per pixel resampled from candidates and
+//   last frame's choice (common/light_reservoir.glsl), whatever the number of lights; its
+//   diffuse lobe goes into the diffuse signal and its specular lobe into gi.specular on every
+//   surface (the reflections pass adds it under the cut-off, where its rays cannot hit a
+//   punctual light). The reservoir goes to gi.reservoir for the next frame;
 // - indirect light: at the bounce ray's hit, next-event estimation toward a light chosen by
 //   power (any kind, with a shadow ray), and the light that surface reflects from other
 //   surfaces from the radiance cache (every further bounce); with `bounces` > 1 the path first
@@ -22,12 +28,14 @@
 //   last one. Where the cache cannot answer (a corner, a cell still empty, or the cache off)
 //   the path traces on.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
-#define RC_BINDING 8
+#include "common/light_reservoir.glsl"
+#define RC_BINDING 14
 #include "common/radiance_cache.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -38,8 +46,15 @@ layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
-layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_specular;
+// Reprojection of last frame's reservoirs (1x1 placeholders when no light is resampled).
+layout(set = 1, binding = 6, rg32f) uniform readonly image2D g_motion;
+layout(set = 1, binding = 7, rg32f) uniform readonly image2D prev_depth;
+layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_normal_geo;
+layout(set = 1, binding = 9, rg32ui) uniform readonly uimage2D prev_ids;
+layout(set = 1, binding = 10, rgba32f) uniform readonly image2D prev_reservoir;
+layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 1, binding = 12, rgba32f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 13, rgba32f) uniform writeonly image2D out_reservoir;
 
 layout(push_constant) uniform Params {
     uint bounces;            // vertices traced after the primary surface before the cache answers
@@ -49,6 +64,19 @@ layout(push_constant) uniform Params {
 
 #define SALT_GI 0x67690000u
 
+// Last frame's reservoir where this pixel's surface was, re-targeted here; empty after a cut, a
+// light change, or where that pixel showed another surface.
+LightReservoir previous_reservoir(ivec2 px, uint id, float z, vec3 ng, ShadingPoint sp) {
+    if ((frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u) return reservoir_empty();
+    ivec2 q = ivec2(floor(vec2(px) + 0.5 - imageLoad(g_motion, px).xy));
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) return reservoir_empty();
+    if (!reservoir_consistent(id, z, ng, imageLoad(prev_ids, q).x, imageLoad(prev_depth, q).r,
+                              imageLoad(prev_normal_geo, q).xyz)) {
+        return reservoir_empty();
+    }
+    return reservoir_unpack(imageLoad(prev_reservoir, q), sp);
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
@@ -56,9 +84,12 @@ void main() {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = mr.y > params.roughness_cutoff;
     bool diffuse = max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
-    if (imageLoad(g_ids, px).x == NO_INSTANCE || !(diffuse || rough)) {
+    bool resampled = resampled_lights_present();
+    uint id = imageLoad(g_ids, px).x;
+    if (id == NO_INSTANCE || !(diffuse || rough || resampled)) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
+        if (resampled) imageStore(out_reservoir, px, reservoir_pack(reservoir_empty()));
         return;
     }
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
@@ -74,23 +105,67 @@ void main() {
     // its albedo.
     vec3 l_sum = vec3(0.0);
 
-    // Direct light from emitters and the environment, light-sampled. Sampled from the shadow
-    // ray's own origin: direction and distance measured from the surface point would overshoot
-    // by the offset, and the shadow ray would hit the emitter it aims at.
-    NeeSample ls = light_sample(origin, rng_next3(rng));
-    if (ls.pdf > 0.0 && dot(ls.dir, ng) > 0.0) {
+    // Direct light. Sampled from the shadow ray's own origin: direction and distance measured
+    // from the surface point would overshoot by the offset, and the shadow ray would hit the
+    // emitter it aims at. Three shadow rays at most, from one call site (the compute backend
+    // inlines its traversal at every call, and each copy lengthens a CPU driver's compile; an
+    // unrolled loop would copy it again):
+    //   0: a light sample for emitters and the environment (a punctual light drawn here is
+    //      skipped: composite or the reservoir shades it);
+    //   1: the frame's resampled-light candidate, tested before it is merged;
+    //   2: last frame's resampled light, re-tested where it wins the merge.
+    ShadingPoint sp = ShadingPoint(origin, n, ng, v, m);
+    LightReservoir r = reservoir_empty();
+    LightReservoir prev = reservoir_empty();
+    if (resampled) {
+        r = reservoir_candidates(sp, rng);
+        prev = previous_reservoir(px, id, depth, ng, sp);
+    }
+    NeeSample chosen = nee_none();  // the resampled light's sample, once found visible
+    [[dont_unroll]] for (uint k = 0u; k < 3u; ++k) {
+        NeeSample ls;
+        if (k == 0u) {
+            ls = light_sample(origin, rng_next3(rng));
+            if (!(ls.pdf > 0.0)) continue;
+        } else if (k == 1u) {
+            if (!(r.w_sum > 0.0)) continue;
+            ls = reservoir_light_sample(sp, r.light, r.u);
+        } else {
+            // An occluded candidate of this frame has weight 0 here, only its count.
+            if (!reservoir_merge(r, prev.light, prev.u, prev.w_sum, prev.p_hat, prev.m, rng_next(rng))) break;
+            ls = reservoir_light_sample(sp, r.light, r.u);
+        }
         float cos_l = max(dot(n, ls.dir), 0.0);
-        if (cos_l > 0.0 && !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
+        bool visible = dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0 &&
+                       !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
+        if (k == 0u) {
+            if (!visible) continue;
             float w = mis_power(ls.pdf, cos_l * INV_PI);
             l_sum += ls.weight * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, ls.dir) * w;
             if (rough) spec_sum += ls.weight * brdf_eval_specular_cos(m, n, v, ls.dir) * w;
+        } else if (visible) {
+            chosen = ls;
+        } else {
+            // Carried forward with weight 0: its candidates still count in M.
+            r.w_sum = 0.0;
         }
     }
+    if (resampled) {
+        float w = reservoir_weight(r);
+        if (w > 0.0) {
+            vec3 le = chosen.weight * w;
+            float cos_l = max(dot(n, chosen.dir), 0.0);
+            l_sum += le * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, chosen.dir);
+            spec_sum += le * brdf_eval_specular_cos(m, n, v, chosen.dir);
+        }
+        imageStore(out_reservoir, px, reservoir_pack(r));
+    }
 
-    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface.
+    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface
+    // (nothing to gather for a smooth metal, which is here only for the resampled lights).
     vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
     float pdf = max(dot(n, dir), 0.0) * INV_PI;
-    if (dot(dir, ng) > 0.0 && pdf > 0.0) {
+    if ((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0) {
         vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);

@@ -2,8 +2,10 @@
 // reflections: the specular lobe, ray traced. Per pixel `rays` directions drawn from the GGX
 // distribution of visible normals (a perfect mirror reflects exactly); each hit is shaded with
 // its emission and a light sample toward a light chosen by power (with a shadow ray); rays that
-// escape see the environment; the radiance cache adds the hit's indirect light. Surfaces rougher than the cut-off trace nothing and take the
-// specular estimate the gi pass made from its own samples (gi.specular). The output is the lobe's
+// escape see the environment; the radiance cache adds the hit's indirect light. Surfaces
+// rougher than the cut-off trace nothing and take the specular estimate the gi pass made from
+// its own samples (gi.specular); under the cut-off gi.specular holds the lobe's share of the
+// resampled punctual lights, which no ray can hit, and is added. The output is the lobe's
 // contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
 // for the denoiser.
 #extension GL_GOOGLE_include_directive : require
@@ -106,6 +108,6 @@ void main() {
             hits += 1.0;
         }
     }
-    imageStore(out_radiance, px, vec4(sum / float(count), 1.0));
+    imageStore(out_radiance, px, vec4(sum / float(count) + imageLoad(in_specular, px).rgb, 1.0));
     imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
 }

@@ -202,7 +202,7 @@ fn history_restarts_on_disocclusion_and_camera_cut() {
 fn converged_pixels_skip_the_later_iterations() {
     let ctx = common::validated_context();
     let pattern: Vec<[f32; 4]> = (0..W * H)
-        .map(|i| if ((i % W) / 2 + (i / W) / 2) % 2 == 0 { [1.0; 4] } else { [0.2, 0.2, 0.2, 1.0] })
+        .map(|i| if ((i % W) / 2 + (i / W) / 2).is_multiple_of(2) { [1.0; 4] } else { [0.2, 0.2, 0.2, 1.0] })
         .collect();
     for converged in [SvgfSettings::default().converged, 0.0] {
         let mut r = renderer_with(&ctx, SvgfSettings { converged, ..no_luminance_stopping() }, 0.0);

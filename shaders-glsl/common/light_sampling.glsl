@@ -275,19 +275,23 @@ NeeSample sample_environment(vec2 u, float pmf) {
     return s;
 }
 
-// One light sample for shading point p: u.x chooses the light, u.yz the point on it.
-NeeSample light_sample(vec3 p, vec3 u) {
-    uint n = light_table.entry_count;
-    if (n == 0u) return nee_none();
-    // First entry whose cumulative probability exceeds u.x (the CPU sets every entry after the
-    // last light with power to exactly 1, so an entry of probability 0 is never chosen).
+// The first entry whose cumulative probability exceeds u (the CPU sets every entry after the
+// last light with power to exactly 1, so an entry of probability 0 is never chosen). Needs a
+// non-empty table.
+uint light_entry_search(float u) {
     uint lo = 0u;
-    uint hi = n - 1u;
+    uint hi = light_table.entry_count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (light_entries[mid].cdf > u.x) hi = mid; else lo = mid + 1u;
+        if (light_entries[mid].cdf > u) hi = mid; else lo = mid + 1u;
     }
-    LightEntry e = light_entries[lo];
+    return lo;
+}
+
+// One light sample for shading point p: u.x chooses the light, u.yz the point on it.
+NeeSample light_sample(vec3 p, vec3 u) {
+    if (light_table.entry_count == 0u) return nee_none();
+    LightEntry e = light_entries[light_entry_search(u.x)];
     if (e.kind == LIGHT_KIND_PUNCTUAL) return sample_punctual_light(e.index, p, u.yz, e.pmf);
     if (e.kind == LIGHT_KIND_EMITTER) return sample_emitter(e.index, p, u.yz, e.pmf);
     return sample_environment(u.yz, e.pmf);

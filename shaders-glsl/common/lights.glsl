@@ -6,6 +6,11 @@
 
 #include "scene.glsl"
 
+// Lights 0..SHADOWED_LIGHTS-1 have their own ray-traced visibility (the shadows chain, one
+// channel each, added by composite); the rest are resampled in gi (common/light_reservoir.glsl).
+// Rust: passes::shadows::MAX_SHADOWED_LIGHTS.
+#define SHADOWED_LIGHTS 4u
+
 struct LightSample {
     vec3 dir;       // from the surface toward the light
     float dist;     // distance to the light (a large value for directional lights)

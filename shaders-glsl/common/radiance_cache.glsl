@@ -31,6 +31,9 @@
 
 #extension GL_EXT_control_flow_attributes : require
 
+// A path vertex's light sample is resampled from a few draws (light_sample_resampled).
+#include "light_reservoir.glsl"
+
 #ifndef RC_BINDING
 #error "RC_BINDING: define the first set-1 binding of the radiance cache before including it"
 #endif
@@ -218,9 +221,8 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
         BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
         vec3 v = -dir;
         vec3 leave = offset_ray(s.position, s.normal_geo);
-        NeeSample ls = light_sample(leave, rng_next3(rng));
-        vec3 f = vec3(0.0);
-        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, s.normal_geo) > 0.0) f = brdf_eval_cos(m, s.normal, v, ls.dir);
+        vec3 f;
+        NeeSample ls = light_sample_resampled(leave, m, s.normal, s.normal_geo, v, rng, f);
         BrdfSample bs = brdf_sample(m, s.normal, v, rng_next3(rng));
         bool scatters = bs.pdf > 0.0 && dot(bs.l, s.normal_geo) > 0.0;
         RcCandidate cached;

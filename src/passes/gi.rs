@@ -1,10 +1,12 @@
 //! gi: diffuse global illumination, one bounce ray per pixel with next-event estimation and the
 //! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
-//! (shaders-glsl/gi.comp).
+//! (shaders-glsl/gi.comp). It also shades the punctual lights past the shadowed ones, one
+//! resampled per pixel with a reservoir kept across frames (common/light_reservoir.glsl).
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::gbuffer;
+use super::history::{self, Kept};
 use super::radiance_cache::Cache;
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview};
@@ -14,8 +16,13 @@ use bytemuck::{Pod, Zeroable};
 pub const NAME: &str = "gi";
 /// Demodulated diffuse radiance: direct light from emitters and the environment, and indirect.
 pub const RADIANCE: Output = Output::new(NAME, "radiance");
-/// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples.
+/// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples;
+/// on every surface, the resampled lights' share of it.
 pub const SPECULAR: Output = Output::new(NAME, "specular");
+/// Per pixel the resampled light chosen, its contribution weight, the candidates behind it and
+/// the point on the light, for the next frame (1x1 when no light is resampled).
+pub const RESERVOIR: Output = Output::new(NAME, "reservoir");
+const RESERVOIR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// gi.comp's push-constant block.
 #[repr(C)]
@@ -40,15 +47,42 @@ impl Default for GiSettings {
 }
 
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
-pub fn new(b: &PassBuilder, s: &GiSettings, seed: u32, roughness_cutoff: f32, cache: &Cache) -> Result<FullscreenPass> {
-    let inputs =
-        [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::NORMAL_GEO, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::IDS]
-            .map(Input::texel)
-            .to_vec();
+/// `resampled_lights`: whether the plan leaves lights to gi's reservoirs (frame-sized then).
+pub fn new(
+    b: &PassBuilder,
+    s: &GiSettings,
+    seed: u32,
+    roughness_cutoff: f32,
+    cache: &Cache,
+    resampled_lights: bool,
+) -> Result<FullscreenPass> {
+    let mut inputs: Vec<Input> = [
+        gbuffer::DEPTH,
+        gbuffer::NORMAL,
+        gbuffer::NORMAL_GEO,
+        gbuffer::BASE_COLOR,
+        gbuffer::METAL_ROUGH,
+        gbuffer::IDS,
+        gbuffer::MOTION,
+    ]
+    .map(Input::texel)
+    .to_vec();
+    inputs.extend([gbuffer::DEPTH, gbuffer::NORMAL_GEO, gbuffer::IDS, RESERVOIR].map(|o| Input::texel(history::of(o))));
     let outputs = vec![
         OutputDesc::storage(RADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), resampled_lights),
     ];
     let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff };
     FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)
+}
+
+/// The reservoirs' copy for the next frame.
+pub fn kept(resampled_lights: bool) -> Kept {
+    let k = Kept::new(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar);
+    if resampled_lights { k } else { k.with_extent(1, 1) }
+}
+
+fn reservoir_size(d: OutputDesc, resampled_lights: bool) -> OutputDesc {
+    if resampled_lights { d } else { d.with_extent(1, 1) }
 }

@@ -195,9 +195,8 @@ impl Renderer {
         } else {
             plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff)
         };
-        for &i in plan.culled_lights.iter().rev() {
-            scene.lights.remove(i);
-        }
+        // The culled lights out, the rest in shading order (the shadowed ones first).
+        scene.lights = plan.light_order.iter().map(|&i| scene.lights[i].clone()).collect();
         let limit = ctx.caps.max_image_dimension_2d;
         if settings.width == 0 || settings.height == 0 || settings.width > limit || settings.height > limit {
             bail!(

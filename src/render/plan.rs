@@ -7,12 +7,23 @@
 //!   with punctual lights only, one hard-shadow ray per light and no filter.
 //! - Lights whose range cannot reach any geometry are culled (static scenes only: in an
 //!   animated scene a light or an object could move into range).
+//! - Up to four punctual lights each get their own ray-traced visibility (exact and noise-free,
+//!   with adaptive soft shadows); with more, the four brightest keep it and the rest are
+//!   resampled in gi: one light per pixel from candidates drawn by power and the pixel's
+//!   reservoir of last frame, with shadow rays, so the cost per pixel does not grow with their
+//!   number (see world::lights::shading_order and shaders-glsl/common/light_reservoir.glsl).
 //! - Instances share one bottom-level structure per unique mesh (reported; always so).
 //! - GI runs every frame when any surface has a diffuse albedo or is rough enough for its
-//!   specular lobe to come from gi; otherwise it would have nothing to add.
+//!   specular lobe to come from gi, or when lights are resampled (gi shades them); otherwise it
+//!   would have nothing to add.
 
+use crate::passes::shadows::MAX_SHADOWED_LIGHTS;
 use crate::scene::{Scene, TextureRef};
 use glam::Vec3;
+
+/// Candidate lights drawn per pixel and frame for the resampled lights (gi); the shaders'
+/// RIS_CANDIDATES (common/light_reservoir.glsl).
+pub const RIS_CANDIDATES: u32 = 8;
 
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FramePlan {
@@ -21,6 +32,11 @@ pub struct FramePlan {
     pub gi: bool,
     /// Indices into the scene's lights that cannot reach any geometry.
     pub culled_lights: Vec<usize>,
+    /// The lights the renderer keeps, as indices into the scene's, in the order it shades them
+    /// (world::lights::shading_order): the first MAX_SHADOWED_LIGHTS get the shadows chain.
+    pub light_order: Vec<usize>,
+    /// Lights past the per-light-shadowed ones, resampled in gi.
+    pub resampled_lights: usize,
     /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
     /// cells by it.
     pub scene_diagonal: f32,
@@ -31,11 +47,14 @@ pub struct FramePlan {
 impl FramePlan {
     /// Everything on (`--full`).
     pub fn full(scene: &Scene) -> Self {
+        let light_order = crate::world::lights::shading_order(scene, &[], MAX_SHADOWED_LIGHTS);
         Self {
             reflections: true,
             soft_shadows: true,
             gi: true,
             culled_lights: Vec::new(),
+            resampled_lights: light_order.len().saturating_sub(MAX_SHADOWED_LIGHTS),
+            light_order,
             scene_diagonal: scene_diagonal(scene),
             reasons: vec!["--full: every pass runs".into()],
         }
@@ -57,7 +76,11 @@ impl FramePlan {
             format!("reflections: no rays, no surface is at or under roughness {roughness_cutoff} (gi estimates the specular lobes)")
         });
 
-        let soft: Vec<&str> = scene.lights.iter().filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
+        let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
+        let light_order = crate::world::lights::shading_order(scene, &culled_lights, MAX_SHADOWED_LIGHTS);
+        let shadowed = &light_order[..light_order.len().min(MAX_SHADOWED_LIGHTS)];
+        let soft: Vec<&str> =
+            shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
         let soft_shadows = !soft.is_empty();
         reasons.push(if soft_shadows {
             format!("shadows: adaptive soft shadows for {} light(s) with a radius: {}", soft.len(), list(&soft))
@@ -65,7 +88,6 @@ impl FramePlan {
             "shadows: every light is punctual: one hard-shadow ray per light, no penumbra detection or filter".into()
         });
 
-        let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
         if scene.is_animated() {
             reasons.push("lights: none culled, the scene is animated".into());
         } else if culled_lights.is_empty() {
@@ -75,6 +97,28 @@ impl FramePlan {
             reasons.push(format!("lights: culled {} whose range reaches no geometry: {}", names.len(), list(&names)));
         }
 
+        let resampled_lights = light_order.len() - shadowed.len();
+        reasons.push(if resampled_lights > 0 {
+            let names: Vec<&str> = shadowed.iter().map(|&i| scene.lights[i].name.as_str()).collect();
+            format!(
+                "many lights: {} punctual lights; the {} brightest ({}) keep a visibility of their own \
+                 (exact, noise-free); the other {resampled_lights} are resampled in gi: per pixel one light \
+                 from {} candidates drawn by power and last frame's choice, weighted by its unshadowed \
+                 contribution, with shadow rays (ReSTIR-style temporal reuse); the cost per pixel does not \
+                 grow with the number of lights",
+                light_order.len(),
+                shadowed.len(),
+                list(&names),
+                RIS_CANDIDATES,
+            )
+        } else {
+            format!(
+                "lights: {} punctual light(s), each with its own ray-traced visibility (at most \
+                 {MAX_SHADOWED_LIGHTS}: exact and noise-free, no resampling needed)",
+                light_order.len()
+            )
+        });
+
         let unique = scene.meshes.len();
         reasons.push(format!(
             "geometry: {} instance(s) share {unique} bottom-level structure(s), one per unique mesh",
@@ -83,13 +127,24 @@ impl FramePlan {
 
         let diffuse = scene.materials.iter().any(|m| m.metallic_factor < 1.0 || m.metallic_roughness_texture.is_some());
         let rough = scene.materials.iter().any(|m| m.roughness_factor > roughness_cutoff);
-        let gi = diffuse || rough;
-        reasons.push(if gi {
+        let gi = diffuse || rough || resampled_lights > 0;
+        reasons.push(if !(diffuse || rough) && gi {
+            "gi: every frame, to shade the resampled lights (every surface is a smooth metal)".into()
+        } else if gi {
             "gi: every frame (diffuse or rough surfaces need indirect light)".into()
         } else {
             "gi: skipped, every surface is a smooth metal (no diffuse lobe, no rough specular)".into()
         });
-        Self { reflections, soft_shadows, gi, culled_lights, scene_diagonal: scene_diagonal(scene), reasons }
+        Self {
+            reflections,
+            soft_shadows,
+            gi,
+            culled_lights,
+            light_order,
+            resampled_lights,
+            scene_diagonal: scene_diagonal(scene),
+            reasons,
+        }
     }
 }
 

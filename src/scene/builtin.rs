@@ -7,8 +7,16 @@ use anyhow::Result;
 use glam::{Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:` (with the stability suite's, `super::builtin_stability::NAMES`).
-pub const NAMES: &[&str] =
-    &["gbuffer-test", "alpha-shadow", "shadow-test", "soft-shadow-test", "checker-test", "facet-test", "morph-test"];
+pub const NAMES: &[&str] = &[
+    "gbuffer-test",
+    "alpha-shadow",
+    "shadow-test",
+    "soft-shadow-test",
+    "checker-test",
+    "facet-test",
+    "morph-test",
+    "many-lights",
+];
 
 pub fn by_name(name: &str) -> Result<Scene> {
     match name {
@@ -19,6 +27,7 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "checker-test" => Ok(checker_test()),
         "facet-test" => Ok(facet_test()),
         "morph-test" => Ok(morph_test()),
+        "many-lights" => Ok(super::builtin_many_lights::many_lights()),
         _ => super::builtin_stability::by_name(name).ok_or_else(|| {
             let known = [NAMES, super::builtin_stability::NAMES].concat().join(", ");
             anyhow::anyhow!("builtin:{name}: no such built-in scene (known: {known})")

@@ -8,6 +8,7 @@
 
 pub mod animation;
 pub mod builtin;
+pub mod builtin_many_lights;
 pub mod builtin_stability;
 pub mod gltf;
 pub mod limits;

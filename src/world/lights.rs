@@ -244,6 +244,21 @@ fn emitter_power(scene: &Scene, e: &GpuEmitter) -> f32 {
     PI * luminance(material.emissive_factor) * e.area * sides
 }
 
+/// The order in which the renderer keeps the scene's lights, `excluded` (culled) left out. The
+/// first `shadowed` get the shadows chain's per-light visibility (exact, with adaptive soft
+/// shadows), the rest are resampled in gi (shaders-glsl/common/light_reservoir.glsl); so with
+/// more lights than that, the brightest (by power, ties in scene order) come first. With no
+/// more, the scene's order is kept.
+pub fn shading_order(scene: &Scene, excluded: &[usize], shadowed: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..scene.lights.len()).filter(|i| !excluded.contains(i)).collect();
+    if order.len() > shadowed {
+        let radius = scene_radius(scene, &scene.evaluate(0.0));
+        let power: Vec<f32> = scene.lights.iter().map(|l| punctual_power(l, radius)).collect();
+        order.sort_by(|&a, &b| power[b].total_cmp(&power[a]));
+    }
+    order
+}
+
 fn punctual_power(light: &crate::scene::Light, radius: f32) -> f32 {
     let i = luminance(light.color * light.intensity).max(0.0);
     match light.kind {
@@ -342,6 +357,33 @@ mod tests {
         assert_eq!(size_of::<GpuLightEntry>(), 16);
         assert_eq!(size_of::<GpuEmitter>(), 4 * (12 + 4));
         assert_eq!(std::mem::offset_of!(GpuEmitter, normal), 48);
+    }
+
+    /// light_reservoir.glsl takes entry i of the table for punctual light i.
+    #[test]
+    fn punctual_lights_lead_the_cdf_in_light_order() {
+        let powers: Vec<(u32, u32, f32)> = (0..6)
+            .map(|i| (LIGHT_KIND_PUNCTUAL, i, 1.0 + i as f32))
+            .chain([(LIGHT_KIND_EMITTER, 0, 2.0), (LIGHT_KIND_ENVIRONMENT, 0, 1.0)])
+            .collect();
+        let entries = light_cdf(&powers);
+        for (i, e) in entries.iter().take(6).enumerate() {
+            assert_eq!((e.kind, e.index), (LIGHT_KIND_PUNCTUAL, i as u32));
+        }
+    }
+
+    #[test]
+    fn more_lights_than_the_shadowed_ones_are_ordered_brightest_first() {
+        let s = crate::scene::builtin_many_lights::many_lights();
+        let order = shading_order(&s, &[], 4);
+        assert_eq!(order.len(), s.lights.len());
+        let radius = scene_radius(&s, &s.evaluate(0.0));
+        let p = |i: usize| punctual_power(&s.lights[i], radius);
+        assert!(order.windows(2).all(|w| p(w[0]) >= p(w[1])));
+        // A few lights keep the scene's order; excluded ones are left out.
+        let s = builtin::soft_shadow_test();
+        assert_eq!(shading_order(&s, &[], 4), vec![0]);
+        assert!(shading_order(&s, &[0], 4).is_empty());
     }
 
     #[test]

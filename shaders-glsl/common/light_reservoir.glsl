@@ -1,0 +1,186 @@
+// Direct light from the punctual lights past the first SHADOWED_LIGHTS, whatever their number:
+// resampled importance sampling with a per-pixel reservoir kept across frames (the candidate
+// and temporal steps of ReSTIR DI, Bitterli et al. 2020). gi.comp drives it and traces its
+// shadow rays.
+//
+// - A sample is a light and the two numbers u that place a point on it (sphere and disk lights;
+//   the others ignore u), so it means the same thing at any shading point.
+// - Candidates: RIS_CANDIDATES lights drawn from the power CDF of the light table, restricted to
+//   the resampled lights. Punctual lights are the table's first entries in light order
+//   (src/world/lights.rs), so the restriction is the CDF's sub-range after entry
+//   SHADOWED_LIGHTS - 1.
+// - Target p_hat: the luminance of the unshadowed contribution f(v, l) cos Le, so that distance,
+//   range, spot cone, cosine and both lobes steer the choice.
+// - Visibility is not in p_hat (a ray per candidate would cost what it saves), but it is in
+//   what a reservoir carries forward: the frame's chosen candidate is shadow-tested before it is
+//   merged, an occluded one enters with weight 0 (its candidates still count in M), and last
+//   frame's choice is tested again when it wins (occluded: weight 0, count kept). So once a pixel has found a light it can see,
+//   it keeps it until a better visible one turns up; a light behind a wall can be drawn (noise)
+//   but never shine through it.
+// - Unbiased contribution weight W = w_sum / (M p_hat(y)); the estimate is f Le(y) W. Merging
+//   last frame's reservoir uses the 1/M weights (biased where neighbouring surfaces differ,
+//   which the reprojection test limits) with its M capped at RESERVOIR_M_CAP, so an old choice
+//   cannot outweigh new candidates forever.
+// The cost per pixel is RIS_CANDIDATES CDF searches (log N each) and BRDF evaluations and at
+// most two shadow rays, however many lights there are.
+#ifndef LIGHT_RESERVOIR_GLSL
+#define LIGHT_RESERVOIR_GLSL
+
+#extension GL_EXT_control_flow_attributes : require
+
+#include "light_sampling.glsl"
+#include "brdf.glsl"
+#include "color.glsl"
+
+// Candidates per pixel and frame (the ReSTIR paper uses 32; RTXDI's fast preset 4 local lights).
+// Rust: render::plan::RIS_CANDIDATES.
+#define RIS_CANDIDATES 8u
+// Last frame's candidates count at most this many times the frame's own (the paper's 20x).
+#define RESERVOIR_M_CAP (20.0 * float(RIS_CANDIDATES))
+#define NO_LIGHT 0xffffffffu
+
+struct LightReservoir {
+    uint light;    // index into lights[]; NO_LIGHT when empty
+    vec2 u;        // the point on the light
+    float w_sum;   // sum of the resampling weights merged
+    float m;       // candidates behind it
+    float p_hat;   // the target of the chosen sample at this pixel
+};
+
+LightReservoir reservoir_empty() { return LightReservoir(NO_LIGHT, vec2(0.0), 0.0, 0.0, 0.0); }
+
+// Whether some light is left to resampling.
+bool resampled_lights_present() { return frame.light_count > SHADOWED_LIGHTS && light_table.entry_count > 0u; }
+
+// The shading point a reservoir is evaluated at.
+struct ShadingPoint {
+    vec3 origin;  // the shadow ray's origin (offset off the surface)
+    vec3 n;       // shading normal
+    vec3 ng;      // geometric normal
+    vec3 v;       // toward the viewer
+    BrdfInput m;
+};
+
+// The light's sample for (light, u) at `sp` with its density in u taken as 1: `weight` is the
+// radiance arriving per unit of u (sphere: times the cone's solid angle), nee_none() when the
+// light is behind the surface.
+NeeSample reservoir_light_sample(ShadingPoint sp, uint light, vec2 u) {
+    NeeSample s = sample_punctual_light(light, sp.origin, u, 1.0);
+    if (dot(s.dir, sp.ng) <= 0.0) return nee_none();
+    return s;
+}
+
+// p_hat: luminance of f(v, l) cos Le for the sample.
+float reservoir_target(ShadingPoint sp, NeeSample s) {
+    float t = luminance(brdf_eval_cos(sp.m, sp.n, sp.v, s.dir) * s.weight);
+    return t > 0.0 && !isinf(t) ? t : 0.0;
+}
+
+// Adds a sample of resampling weight w (and the m candidates behind it) to r; `xi` in [0, 1)
+// decides whether it replaces the chosen one, which the result says.
+bool reservoir_merge(inout LightReservoir r, uint light, vec2 u, float w, float p_hat, float m, float xi) {
+    r.m += m;
+    if (!(w > 0.0)) return false;
+    r.w_sum += w;
+    if (xi * r.w_sum >= w) return false;
+    r.light = light;
+    r.u = u;
+    r.p_hat = p_hat;
+    return true;
+}
+
+// The frame's own reservoir: RIS_CANDIDATES candidates drawn by power, resampled by p_hat.
+LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
+    LightReservoir r = reservoir_empty();
+    uint last = frame.light_count - 1u;
+    float lo = light_entries[SHADOWED_LIGHTS - 1u].cdf;
+    float hi = light_entries[last].cdf;
+    if (!(hi > lo)) return r;  // the resampled lights have no power
+    // Not unrolled: each copy of the body would lengthen a CPU driver's compile.
+    [[dont_unroll]] for (uint k = 0u; k < RIS_CANDIDATES; ++k) {
+        vec3 u = rng_next3(rng);
+        uint entry = light_entry_search(lo + u.x * (hi - lo));
+        float w = 0.0, p_hat = 0.0;
+        // Rounding can put lo + u (hi - lo) on hi itself; such a draw selects nothing.
+        if (entry >= SHADOWED_LIGHTS && entry <= last) {
+            NeeSample s = reservoir_light_sample(sp, entry, u.yz);
+            p_hat = reservoir_target(sp, s);
+            w = p_hat / (light_entries[entry].pmf / (hi - lo));
+        }
+        reservoir_merge(r, entry, u.yz, w, p_hat, 1.0, rng_next(rng));
+    }
+    return r;
+}
+
+// Draws behind one light sample at a path vertex (light_sample_resampled), where lights are
+// resampled at all.
+#define RIS_VERTEX_CANDIDATES 4u
+
+// One light sample at a path vertex, any kind of light, chosen among RIS_VERTEX_CANDIDATES draws
+// of light_sample (by power) by the luminance of their unshadowed contribution f cos Le; `f` is
+// the chosen one's f cos. Resampled in primary sample space: every draw's u is uniform, so a
+// draw's resampling weight is its target itself, and delta, area and environment lights mix
+// without a common measure. `weight` includes the RIS factor; pdf is 0, as for a sample no BSDF
+// ray can reach (the caller gives it full weight). Far fewer of its samples are wasted on lights
+// that are far, out of range or behind the surface than with one draw by power, which matters
+// where a path vertex sees few of many lights. With few lights (none resampled) it draws once,
+// which is light_sample itself at its cost: four draws made gi 14% slower on the default scene
+// (bench frame, 640x360), where they have little to choose from.
+NeeSample light_sample_resampled(vec3 origin, BrdfInput m, vec3 n, vec3 ng, vec3 v, inout Rng rng, out vec3 f) {
+    NeeSample chosen = nee_none();
+    f = vec3(0.0);
+    float w_sum = 0.0, p_chosen = 0.0;
+    uint draws = resampled_lights_present() ? RIS_VERTEX_CANDIDATES : 1u;
+    // Not unrolled: each copy of the body would lengthen a CPU driver's compile.
+    [[dont_unroll]] for (uint k = 0u; k < draws; ++k) {
+        NeeSample s = light_sample(origin, rng_next3(rng));
+        if (dot(s.weight, s.weight) <= 0.0 || dot(s.dir, ng) <= 0.0) continue;
+        vec3 fk = brdf_eval_cos(m, n, v, s.dir);
+        float p_hat = luminance(fk * s.weight);
+        if (!(p_hat > 0.0) || isinf(p_hat)) continue;
+        w_sum += p_hat;
+        if (rng_next(rng) * w_sum < p_hat) {
+            chosen = s;
+            f = fk;
+            p_chosen = p_hat;
+        }
+    }
+    if (!(p_chosen > 0.0)) return nee_none();
+    chosen.weight *= (w_sum / float(draws)) / p_chosen;
+    chosen.pdf = 0.0;
+    return chosen;
+}
+
+// W: the chosen sample's unbiased contribution weight (0 for an empty reservoir).
+float reservoir_weight(LightReservoir r) {
+    return r.light != NO_LIGHT && r.p_hat > 0.0 && r.m > 0.0 ? r.w_sum / (r.m * r.p_hat) : 0.0;
+}
+
+// Stored as (light, W, M, u): what the next frame needs to merge it at another shading point.
+vec4 reservoir_pack(LightReservoir r) {
+    return vec4(uintBitsToFloat(r.light), reservoir_weight(r), r.m, uintBitsToFloat(packUnorm2x16(r.u)));
+}
+
+// Last frame's reservoir `texel`, re-targeted at `sp` (its M capped): ready to merge with weight
+// p_hat W M. One that found no visible light (W = 0) still brings its count: dropping it would
+// keep only the frames that found one, and so overestimate.
+LightReservoir reservoir_unpack(vec4 texel, ShadingPoint sp) {
+    LightReservoir r = reservoir_empty();
+    if (!(texel.z > 0.0)) return r;
+    r.m = min(texel.z, RESERVOIR_M_CAP);
+    uint light = floatBitsToUint(texel.x);
+    if (light < SHADOWED_LIGHTS || light >= frame.light_count || !(texel.y > 0.0)) return r;
+    r.light = light;
+    r.u = unpackUnorm2x16(floatBitsToUint(texel.w));
+    r.p_hat = reservoir_target(sp, reservoir_light_sample(sp, light, r.u));
+    r.w_sum = r.p_hat * texel.y * r.m;
+    return r;
+}
+
+// Whether last frame's reservoir at a reprojected pixel belongs to the same surface: same
+// instance, view depth within 10%, normals within about 25 degrees (ReSTIR's test).
+bool reservoir_consistent(uint id, float z, vec3 ng, uint id_prev, float z_prev, vec3 ng_prev) {
+    return id == id_prev && abs(z - z_prev) <= 0.1 * z && dot(ng, ng_prev) > 0.9;
+}
+
+#endif
