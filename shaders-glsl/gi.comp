@@ -131,6 +131,9 @@ void main() {
             if (!(r.w_sum > 0.0)) continue;
             ls = reservoir_light_sample(sp, r.light, r.u);
         } else {
+            // (Without resampled lights no random number is drawn here, so those scenes keep the
+            // random streams, and so the images, they had before the reservoirs.)
+            if (!resampled) break;
             // An occluded candidate of this frame has weight 0 here, only its count.
             if (!reservoir_merge(r, prev.light, prev.u, prev.w_sum, prev.p_hat, prev.m, rng_next(rng))) break;
             ls = reservoir_light_sample(sp, r.light, r.u);

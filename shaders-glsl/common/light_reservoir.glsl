@@ -139,7 +139,9 @@ NeeSample light_sample_resampled(vec3 origin, BrdfInput m, vec3 n, vec3 ng, vec3
         float p_hat = luminance(fk * s.weight);
         if (!(p_hat > 0.0) || isinf(p_hat)) continue;
         w_sum += p_hat;
-        if (rng_next(rng) * w_sum < p_hat) {
+        // A lone draw is always kept; drawing no number for it keeps light_sample's random
+        // stream, and so the images of scenes without resampled lights, as they were.
+        if (draws == 1u || rng_next(rng) * w_sum < p_hat) {
             chosen = s;
             f = fk;
             p_chosen = p_hat;
