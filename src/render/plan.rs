@@ -250,5 +250,23 @@ mod tests {
         // The same light in reach stays.
         s.nodes[node as usize].translation = Vec3::new(0.0, 1.5, 0.0);
         assert!(FramePlan::for_scene(&s, 0.6).culled_lights.is_empty());
+        assert_eq!(FramePlan::for_scene(&s, 0.6).light_order, vec![0, 1]);
+    }
+
+    #[test]
+    fn lights_past_the_shadowed_four_are_resampled_and_the_plan_names_the_four() {
+        let s = crate::scene::builtin_many_lights::many_lights();
+        let p = FramePlan::for_scene(&s, 0.6);
+        // (The camera room's highest lights reach no surface with their short range: culled.)
+        assert_eq!(p.light_order.len(), s.lights.len() - p.culled_lights.len());
+        assert_eq!(p.resampled_lights, p.light_order.len() - MAX_SHADOWED_LIGHTS);
+        assert!(p.resampled_lights > 250, "{:?}", p.reasons);
+        let line = p.reasons.iter().find(|r| r.starts_with("many lights")).expect("no many-lights line");
+        for &i in &p.light_order[..MAX_SHADOWED_LIGHTS] {
+            assert!(line.contains(&s.lights[i].name), "{line}");
+        }
+        // Four lights or fewer: none resampled, the scene's order kept.
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6);
+        assert_eq!((p.resampled_lights, p.light_order.clone()), (0, vec![0]));
     }
 }
