@@ -113,9 +113,9 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
 }
 
 // Draws behind one light sample at a path vertex (light_sample_resampled), where lights are
-// resampled at all. The denoised frame of builtin:many-lights lost 38, 31, 24 and 20% of the
-// light with 1, 4, 8 and 16 draws (SVGF's outlier clamp takes the rare lucky samples of a
-// sparse choice for fireflies).
+// resampled at all. The denoised frame of builtin:many-lights lost 31, 24 and 20% of the light
+// with 4, 8 and 16 draws (SVGF's outlier clamp takes the rare lucky samples of a sparse choice
+// for fireflies).
 #define RIS_VERTEX_CANDIDATES 8u
 
 // One light sample at a path vertex, any kind of light, chosen among RIS_VERTEX_CANDIDATES draws
