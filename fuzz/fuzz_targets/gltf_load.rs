@@ -31,6 +31,7 @@ fn fuzz_limits() -> Limits {
         max_data_uri_bytes: 16 << 20,
         max_instances: 1 << 20,
         max_animation_keys: 4 << 20,
+        max_joints: 1 << 12,
     }
 }
 

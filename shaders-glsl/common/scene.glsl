@@ -6,13 +6,7 @@
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_nonuniform_qualifier : require
 
-struct Vertex {
-    vec3 position;
-    vec3 normal;
-    vec4 tangent;
-    vec2 uv0;
-    vec2 uv1;
-};
+#include "vertex.glsl"
 
 struct MeshInfo {
     uint first_index;
@@ -22,6 +16,8 @@ struct MeshInfo {
 };
 
 #define INSTANCE_ALPHA_MASKED 1u
+// The mesh is skinned: last frame's positions are in `prev_positions` (motion vectors).
+#define INSTANCE_SKINNED 2u
 
 struct InstanceInfo {
     mat4 object_to_world;
@@ -109,5 +105,7 @@ layout(set = 0, binding = 4, scalar) readonly buffer Instances { InstanceInfo in
 layout(set = 0, binding = 5, scalar) readonly buffer Materials { MaterialInfo materials[]; };
 layout(set = 0, binding = 6, scalar) readonly buffer Lights { LightInfo lights[]; };
 layout(set = 0, binding = 7) uniform sampler2D textures[];
+// Last frame's position of every skinned vertex (by vertex-buffer index; src/world/skinning.rs).
+layout(set = 0, binding = 18, scalar) readonly buffer PrevPositions { vec3 prev_positions[]; };
 
 #endif

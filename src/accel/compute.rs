@@ -81,7 +81,7 @@ impl ComputeAccel {
         };
         let mut deforming = Vec::new();
         let mut staging_bytes = 0u64;
-        for mesh in scene.morphs.iter().map(|m| m.mesh) {
+        for mesh in (0..scene.meshes.len() as u32).filter(|&m| scene.deforms(m)) {
             deforming.push(Deforming { mesh, staging_offset: staging_bytes, refits: 0 });
             staging_bytes += (bvh.blas.meshes[mesh as usize].rows as usize * size_of::<Row>()) as u64;
         }

@@ -66,7 +66,7 @@ impl HardwareAccel {
             .collect();
         // Static meshes are built once for fast tracing and compacted; deforming ones are
         // updated in place, which compaction would not allow.
-        let allow_update: Vec<bool> = (0..geometries.len()).map(|i| scene.morph_of(i as u32).is_some()).collect();
+        let allow_update: Vec<bool> = (0..geometries.len()).map(|i| scene.deforms(i as u32)).collect();
         let deforming: Vec<Deforming> = (0..geometries.len() as u32)
             .filter(|&i| allow_update[i as usize])
             .map(|mesh| Deforming { mesh, updates: 0, pending: None })

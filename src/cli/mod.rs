@@ -109,6 +109,9 @@ pub struct LimitArgs {
     /// Most keyframe times and values over all animations.
     #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_animation_keys)]
     pub max_animation_keys: u64,
+    /// Most skin joints over all skins.
+    #[arg(long, help_heading = LIMITS, value_name = "N", default_value_t = Limits::default().max_joints)]
+    pub max_joints: u64,
 }
 
 impl LimitArgs {
@@ -127,6 +130,7 @@ impl LimitArgs {
             max_data_uri_bytes: mib(self.max_data_uri_mib),
             max_instances: self.max_instances,
             max_animation_keys: self.max_animation_keys,
+            max_joints: self.max_joints,
         }
     }
 }

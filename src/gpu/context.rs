@@ -118,6 +118,8 @@ pub struct Capabilities {
     pub timestamp_period_ns: f32,
     pub max_color_attachments: u32,
     pub max_image_dimension_2d: u32,
+    /// Bytes one storage-buffer binding may span (the skinning pass's joint matrices).
+    pub max_storage_buffer_range: u32,
     /// Ray tracing hidden by request (`HYBRID_RT_HIDE_RAY_TRACING` or the option).
     pub ray_tracing_hidden: bool,
     /// Dynamic rendering and synchronization2 come from core Vulkan 1.3 (else from the KHR
@@ -605,6 +607,7 @@ fn probe(
         timestamp_period_ns: if ts_bits > 0 { props.limits.timestamp_period } else { 0.0 },
         max_color_attachments: props.limits.max_color_attachments,
         max_image_dimension_2d: props.limits.max_image_dimension2_d,
+        max_storage_buffer_range: props.limits.max_storage_buffer_range,
         ray_tracing_hidden: hidden.any(),
         core_1_3: is_13,
     };

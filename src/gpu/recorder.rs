@@ -1,7 +1,7 @@
 //! A safe view of a command buffer for passes: bind, push, dispatch, draw, copy, time. Passes
 //! record through this and never touch ash directly.
 
-use super::{Buffer, Context, Image, Pipeline, PushResource, TimestampPool};
+use super::{Buffer, Context, DescriptorSet, Image, Pipeline, PushResource, TimestampPool};
 use ash::vk;
 
 pub struct Recorder<'a> {
@@ -29,6 +29,14 @@ impl<'a> Recorder<'a> {
         // makes), alive as long as the scene upload that binds it, and it matches set 0 of
         // every pipeline layout made from the scene set layout.
         unsafe { self.ctx.device.cmd_bind_descriptor_sets(self.cmd, p.bind_point, p.layout, 0, &[set], &[]) };
+    }
+
+    /// Binds a pipeline's own set 0, for the pipelines outside the frame graph that do not read
+    /// the scene set (skinning).
+    pub fn bind_own_set(&self, p: &Pipeline, set: &DescriptorSet) {
+        // SAFETY: recording; `set` is borrowed (live), and its owner keeps it alive until the
+        // frame's fence wait, as it does the pipeline made with its layout.
+        unsafe { self.ctx.device.cmd_bind_descriptor_sets(self.cmd, p.bind_point, p.layout, 0, &[set.raw], &[]) };
     }
 
     /// Pushes the pass's resources into set 1, bindings numbered 0.. in order.

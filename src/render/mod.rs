@@ -208,7 +208,7 @@ impl Renderer {
         let camera = camera::resolve(&scene, camera)?;
         let pool = CommandPool::new(ctx)?;
         let pose = scene.evaluate(settings.start_time);
-        let scene_gpu = SceneGpu::upload(ctx, &pool, &scene, &pose, backend, &environment, settings.brdf)?;
+        let scene_gpu = SceneGpu::upload(ctx, &pool, shaders, &scene, &pose, backend, &environment, settings.brdf)?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
         let parts = frame_parts(&b, &settings, &plan)?;
         let extent = vk::Extent2D { width: settings.width, height: settings.height };

@@ -16,6 +16,7 @@ pub const NAMES: &[&str] = &[
     "facet-test",
     "morph-test",
     "many-lights",
+    "skin-test",
 ];
 
 pub fn by_name(name: &str) -> Result<Scene> {
@@ -28,6 +29,7 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "facet-test" => Ok(facet_test()),
         "morph-test" => Ok(morph_test()),
         "many-lights" => Ok(super::builtin_many_lights::many_lights()),
+        "skin-test" => Ok(super::builtin_skin::skin_test()),
         _ => super::builtin_stability::by_name(name).ok_or_else(|| {
             let known = [NAMES, super::builtin_stability::NAMES].concat().join(", ");
             anyhow::anyhow!("builtin:{name}: no such built-in scene (known: {known})")
@@ -380,7 +382,7 @@ pub(super) fn node(name: &str, t: Vec3) -> Node {
     Node { name: name.into(), parent: None, translation: t, rotation: Quat::IDENTITY, scale: Vec3::ONE }
 }
 
-fn vertex(p: Vec3, n: Vec3, t: Vec3, uv: [f32; 2]) -> Vertex {
+pub(super) fn vertex(p: Vec3, n: Vec3, t: Vec3, uv: [f32; 2]) -> Vertex {
     Vertex { position: p.to_array(), normal: n.to_array(), tangent: t.extend(1.0).to_array(), uv0: uv, uv1: uv }
 }
 
@@ -529,7 +531,7 @@ pub fn morph_test() -> Scene {
     s
 }
 
-fn finish(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>, material: u32) -> Mesh {
+pub(super) fn finish(name: &str, vertices: Vec<Vertex>, indices: Vec<u32>, material: u32) -> Mesh {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for v in &vertices {
         lo = lo.min(Vec3::from(v.position));

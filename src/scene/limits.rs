@@ -40,6 +40,9 @@ pub struct Limits {
     /// Keyframe times and values over all animation channels (default 16 M). Channels may
     /// share accessors, so their total is not bounded by the size of any one of them.
     pub max_animation_keys: u64,
+    /// Joints over all skins (default 65 536). Each joint's matrices are rewritten for the GPU
+    /// every animated frame, and a skin must fit one storage buffer.
+    pub max_joints: u64,
 }
 
 impl Default for Limits {
@@ -56,13 +59,14 @@ impl Default for Limits {
             max_data_uri_bytes: 256 << 20,
             max_instances: 4_000_000,
             max_animation_keys: 16_000_000,
+            max_joints: 65_536,
         }
     }
 }
 
 /// The command-line flag that sets each limit (`hybrid-rt render --help` lists them): an
 /// exceeded limit names its flag, so the user learns what to raise without reading the source.
-pub const FLAGS: [(&str, &str); 11] = [
+pub const FLAGS: [(&str, &str); 12] = [
     ("max_triangles", "--max-triangles"),
     ("max_vertices", "--max-vertices"),
     ("max_texture_dimension", "--max-texture-size"),
@@ -74,6 +78,7 @@ pub const FLAGS: [(&str, &str); 11] = [
     ("max_data_uri_bytes", "--max-data-uri-mib"),
     ("max_instances", "--max-instances"),
     ("max_animation_keys", "--max-animation-keys"),
+    ("max_joints", "--max-joints"),
 ];
 
 /// Fails with an error naming the file, what was measured, the limit, both values and the

@@ -9,10 +9,12 @@
 pub mod animation;
 pub mod builtin;
 pub mod builtin_many_lights;
+pub mod builtin_skin;
 pub mod builtin_stability;
 pub mod gltf;
 pub mod limits;
 pub mod morph;
+pub mod skin;
 pub mod tangents;
 
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -21,6 +23,7 @@ use std::path::PathBuf;
 pub use self::gltf::{LoadOptions, load_gltf, load_gltf_bytes};
 pub use limits::Limits;
 pub use morph::{Morph, MorphTarget, WeightChannel};
+pub use skin::{Influence, Skin, SkinnedMesh};
 
 /// A scene-loading failure. The message always names the file and the problem.
 #[derive(Debug, thiserror::Error)]
@@ -298,6 +301,10 @@ pub struct Scene {
     pub animations: Vec<Animation>,
     /// Morph targets of the deforming meshes, at most one per mesh.
     pub morphs: Vec<Morph>,
+    /// Skeletons of the skinned meshes.
+    pub skins: Vec<Skin>,
+    /// Meshes deformed by a skin, at most one entry per mesh; none of them also morphs.
+    pub skinned: Vec<SkinnedMesh>,
     /// Recoverable defects found while loading, each naming the defect.
     pub warnings: Vec<String>,
 }
@@ -343,6 +350,17 @@ impl Scene {
     /// The morph targets of `mesh`, if it deforms.
     pub fn morph_of(&self, mesh: u32) -> Option<&Morph> {
         self.morphs.iter().find(|m| m.mesh == mesh)
+    }
+
+    /// The skin deforming `mesh`, if any.
+    pub fn skinned_of(&self, mesh: u32) -> Option<&SkinnedMesh> {
+        self.skinned.iter().find(|s| s.mesh == mesh)
+    }
+
+    /// Whether `mesh`'s vertices change from frame to frame (morph targets or a skin): its
+    /// bottom-level structure is built for updates.
+    pub fn deforms(&self, mesh: u32) -> bool {
+        self.morph_of(mesh).is_some() || self.skinned_of(mesh).is_some()
     }
 
     /// World-space bounds of all instances at a pose.

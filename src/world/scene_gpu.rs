@@ -2,7 +2,8 @@
 //! material and light tables, textures with CPU-built mip chains, and the scene descriptor set
 //! (set 0) every pass binds. Geometry and textures are uploaded once; the instance table and
 //! the lights are rewritten each frame from the animated pose, and deforming meshes' vertices
-//! when their morph weights change (src/world/deform.rs).
+//! when their morph weights change (src/world/deform.rs) or their joints move
+//! (src/world/skinning.rs).
 
 use super::environment::EnvironmentData;
 use super::lights::{self, LightTables};
@@ -10,7 +11,7 @@ use crate::accel::{self, RayAccel};
 use crate::backend::Backend;
 use crate::gpu::{
     self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, Image,
-    MemoryLocation, Recorder, Sampler, SamplerDesc, vk,
+    MemoryLocation, Recorder, Sampler, SamplerDesc, ShaderLibrary, vk,
 };
 use crate::scene::{self, LightKind, Pose, Scene};
 use anyhow::Result;
@@ -38,6 +39,8 @@ pub mod binding {
     pub const ENV_CDF: u32 = 16;
     /// The material model and the specular directional-albedo table (src/world/brdf.rs).
     pub const BRDF_DATA: u32 = 17;
+    /// Last frame's positions of skinned vertices (src/world/skinning.rs).
+    pub const PREV_POSITIONS: u32 = 18;
 }
 
 #[repr(C)]
@@ -50,6 +53,9 @@ pub struct GpuMesh {
 }
 
 pub const INSTANCE_ALPHA_MASKED: u32 = 1;
+/// The instance's mesh is skinned: the G-buffer reads last frame's positions from
+/// `prev_positions`. Mirrors INSTANCE_SKINNED in common/scene.glsl.
+pub const INSTANCE_SKINNED: u32 = 2;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -157,6 +163,9 @@ pub struct SceneGpu {
     /// Whether the lights written by the last `update_pose` differ from the frame's before.
     pub lights_changed: bool,
     deformer: Option<super::deform::Deformer>,
+    /// One vec3 per vertex: where skinned vertices were last frame.
+    _prev_positions: Buffer,
+    skinner: Option<super::skinning::Skinner>,
 }
 
 fn mat(m: Mat4) -> [[f32; 4]; 4] {
@@ -164,9 +173,11 @@ fn mat(m: Mat4) -> [[f32; 4]; 4] {
 }
 
 impl SceneGpu {
+    #[allow(clippy::too_many_arguments)]
     pub fn upload(
         ctx: &Arc<Context>,
         pool: &CommandPool,
+        shaders: &ShaderLibrary,
         scene: &Scene,
         pose: &Pose,
         backend: Backend,
@@ -242,6 +253,25 @@ impl SceneGpu {
         let accel = accel::create(backend, ctx, pool, scene, pose, &geometry)?;
         let base_vertex: Vec<i32> = mesh_table.iter().map(|m| m.base_vertex).collect();
         let deformer = super::deform::Deformer::new(ctx, scene, &base_vertex, backend == Backend::RayQuery)?;
+        // Only skinned vertices are ever read from it; without skins it is one element.
+        let skinned_vertices =
+            if scene.skinned.is_empty() { 1 } else { scene.meshes.iter().map(|m| m.vertices.len()).sum() };
+        let prev_positions = Buffer::new(
+            ctx,
+            "scene.prev_positions",
+            (skinned_vertices * size_of::<[f32; 3]>()) as u64,
+            storage,
+            MemoryLocation::GpuOnly,
+        )?;
+        let skinner = super::skinning::Skinner::new(
+            ctx,
+            pool,
+            shaders,
+            scene,
+            &base_vertex,
+            (&vertices, &prev_positions),
+            backend == Backend::RayQuery,
+        )?;
         let mut bindings = scene_bindings(texture_bindings.len() as u32);
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
@@ -260,6 +290,7 @@ impl SceneGpu {
         accel.write_set(&set);
         light_tables.write_set(&set);
         set.write_buffer(binding::BRDF_DATA, BindingKind::StorageBuffer, &brdf_data);
+        set.write_buffer(binding::PREV_POSITIONS, BindingKind::StorageBuffer, &prev_positions);
 
         let mut gpu = Self {
             vertices,
@@ -282,6 +313,8 @@ impl SceneGpu {
             prev_lights: None,
             lights_changed: true,
             deformer,
+            _prev_positions: prev_positions,
+            skinner,
         };
         gpu.update_pose(scene, pose)?;
         Ok(gpu)
@@ -297,13 +330,14 @@ impl SceneGpu {
                 let m = pose.world[inst.node as usize];
                 let mesh = &scene.meshes[inst.mesh as usize];
                 let masked = scene.materials[mesh.material as usize].alpha_mode.cutoff().is_some();
+                let skinned = scene.skinned_of(inst.mesh).is_some();
                 GpuInstance {
                     object_to_world: mat(m),
                     prev_object_to_world: mat(prev[inst.node as usize]),
                     normal_to_world: mat(m.inverse().transpose()),
                     mesh: inst.mesh,
                     material: mesh.material,
-                    flags: if masked { INSTANCE_ALPHA_MASKED } else { 0 },
+                    flags: if masked { INSTANCE_ALPHA_MASKED } else { 0 } | if skinned { INSTANCE_SKINNED } else { 0 },
                     pad: 0,
                 }
             })
@@ -315,8 +349,14 @@ impl SceneGpu {
             bytemuck::cast_slice::<GpuLight, u8>(prev) != bytemuck::cast_slice::<GpuLight, u8>(&lights)
         });
         self.prev_lights = Some(lights);
+        let mut changed = Vec::new();
         if let Some(deformer) = &mut self.deformer {
-            let changed = deformer.update(scene, pose)?;
+            changed.extend(deformer.update(scene, pose)?);
+        }
+        if let Some(skinner) = &mut self.skinner {
+            changed.extend(skinner.update(scene, pose)?);
+        }
+        if !changed.is_empty() {
             let meshes: Vec<(u32, &[Vec3])> = changed.iter().map(|(m, p)| (*m, p.as_slice())).collect();
             self.accel.update_geometry(scene, pose, &meshes)?;
         }
@@ -333,6 +373,9 @@ impl SceneGpu {
     pub fn record_update(&mut self, rec: &Recorder) -> Result<()> {
         if let Some(deformer) = &mut self.deformer {
             deformer.record(rec, &self.vertices);
+        }
+        if let Some(skinner) = &mut self.skinner {
+            skinner.record(rec);
         }
         self.accel.record_update(rec)
     }
@@ -361,6 +404,7 @@ fn scene_bindings(texture_count: u32) -> Vec<Binding> {
         b(binding::LIGHTS, BindingKind::StorageBuffer),
         Binding { binding: binding::TEXTURES, kind: BindingKind::SampledImage, count: texture_count },
         b(binding::BRDF_DATA, BindingKind::StorageBuffer),
+        b(binding::PREV_POSITIONS, BindingKind::StorageBuffer),
     ]
 }
 

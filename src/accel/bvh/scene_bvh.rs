@@ -14,7 +14,7 @@ impl SceneBvh {
             let mesh = &scene.meshes[i];
             let positions: Vec<Vec3> = mesh.vertices.iter().map(|v| v.position.into()).collect();
             let mut tree = MeshBvh::build(&positions, &mesh.indices, &BuildOptions::MESH);
-            if scene.morph_of(i as u32).is_some() {
+            if scene.deforms(i as u32) {
                 // Room for whatever shape a rebuild for deformed vertices gives.
                 tree.rows.resize(reserved_rows(tree.triangle_count), [0; 4]);
             }

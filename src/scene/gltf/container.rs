@@ -83,11 +83,6 @@ pub(super) fn check_asset(ctx: &Ctx, root: &json::Root) -> Result<(), SceneError
             return Err(ctx.err(format!("extensionsRequired[{i}]: required extension {ext} is not supported")));
         }
     }
-    for ext in &root.extensions_used {
-        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
-            log::debug!("{}: ignoring extension {ext}", ctx.file.display());
-        }
-    }
     Ok(())
 }
 

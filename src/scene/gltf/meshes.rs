@@ -2,6 +2,7 @@
 //! (MikkTSpace tangents where the file has none) and per-scene vertex and triangle budgets.
 
 use super::accessors::{read_floats, read_indices};
+use super::skins::PrimitiveInfluences;
 use super::{Builder, MATERIALS, MESHES, lookup, lookup_or_warn};
 use crate::scene::{Material, Mesh, Morph, MorphTarget, SceneError, Vertex, tangents};
 use glam::Vec3;
@@ -10,6 +11,10 @@ use gltf::json::validation::Checked;
 
 // ---------------------------------------------------------------------------------------------
 // Meshes.
+
+/// A primitive as loaded: its mesh, morph targets (empty when it has none) and joint
+/// influences (`None` when it has none).
+type Primitive = (Mesh, Vec<MorphTarget>, Option<PrimitiveInfluences>);
 
 impl Builder<'_> {
     /// The `Scene::meshes` indices of a glTF mesh's primitives, built on first use so that
@@ -29,9 +34,12 @@ impl Builder<'_> {
                 None => path.clone(),
             };
             let id = match self.primitive(primitive, &path, name)? {
-                Some((m, targets)) => {
+                Some((m, targets, influences)) => {
                     self.scene.meshes.push(m);
                     let id = (self.scene.meshes.len() - 1) as u32;
+                    if let Some(influences) = influences {
+                        self.skin_influences.insert(id, influences);
+                    }
                     if !targets.is_empty() {
                         let weights = match &mesh.weights {
                             Some(w) => self.fit_weights(w, targets.len(), &format!("meshes[{index}].weights")),
@@ -52,14 +60,14 @@ impl Builder<'_> {
         Ok(built)
     }
 
-    /// One primitive as a mesh, with its morph targets (empty when it has none); `None` (with
-    /// a warning) for primitives that draw no triangles.
+    /// One primitive as a mesh, with its morph targets (empty when it has none) and joint
+    /// influences; `None` (with a warning) for primitives that draw no triangles.
     pub(super) fn primitive(
         &mut self,
         prim: &json::mesh::Primitive,
         path: &str,
         name: String,
-    ) -> Result<Option<(Mesh, Vec<MorphTarget>)>, SceneError> {
+    ) -> Result<Option<Primitive>, SceneError> {
         use json::mesh::Semantic;
         let Some(mode) = self.triangle_mode(prim, path) else {
             return Ok(None);
@@ -74,9 +82,20 @@ impl Builder<'_> {
             return Ok(None);
         };
         let mut targets = self.morph_targets(prim, path, vertices.len())?;
+        let mut influences = self.influences(prim, path, vertices.len())?;
         let material = self.primitive_material(prim, path);
         let file_vertices = vertices.len();
+        // Flat normals give every triangle corner a vertex of its own, a copy of the file's
+        // vertex its index named: the joint influences follow that map.
+        let corner_sources = (!present.normals && influences.is_some()).then(|| indices.clone());
         self.shading_frame(&mut vertices, &mut indices, present, material, path)?;
+        if let (Some(sources), Some(read)) = (&corner_sources, &mut influences)
+            && vertices.len() == sources.len()
+        {
+            let by_file_vertex = std::mem::take(&mut read.influences);
+            read.influences =
+                sources.iter().map(|&i| by_file_vertex.get(i as usize).copied().unwrap_or_default()).collect();
+        }
         if !targets.is_empty() && vertices.len() != file_vertices {
             // Generated flat normals or tangent seams split vertices; the deltas no longer
             // line up with them.
@@ -86,6 +105,13 @@ impl Builder<'_> {
             ));
             targets.clear();
         }
+        if influences.as_ref().is_some_and(|r| r.influences.len() != vertices.len()) {
+            self.ctx.warn(format!(
+                "{path}: skinning a primitive whose tangents are generated with seams is not supported; \
+                 the mesh is drawn in its bind pose"
+            ));
+            influences = None;
+        }
         let (mut bounds_min, mut bounds_max) = bounds(&vertices);
         // The bounds cover the targets at any weights in [0, 1] (framing and culling use
         // them); weights outside that range can leave them.
@@ -93,7 +119,7 @@ impl Builder<'_> {
             let (lo, hi) = t.positions.iter().fold((Vec3::ZERO, Vec3::ZERO), |(lo, hi), d| (lo.min(*d), hi.max(*d)));
             (bounds_min, bounds_max) = (bounds_min + lo, bounds_max + hi);
         }
-        Ok(Some((Mesh { name, vertices, indices, material, bounds_min, bounds_max }, targets)))
+        Ok(Some((Mesh { name, vertices, indices, material, bounds_min, bounds_max }, targets, influences)))
     }
 
     /// The primitive's morph targets: POSITION and NORMAL deltas, one per vertex. TANGENT

@@ -21,6 +21,7 @@ mod images;
 mod materials;
 mod meshes;
 mod nodes;
+mod skins;
 #[cfg(test)]
 mod tests;
 
@@ -199,6 +200,10 @@ struct Builder<'a> {
     total_vertices: u64,
     total_triangles: u64,
     total_animation_keys: u64,
+    /// Joint influences of the primitives that have them, by `Scene::meshes` index.
+    skin_influences: std::collections::HashMap<u32, skins::PrimitiveInfluences>,
+    /// `Scene::skins` index of each glTF skin built so far.
+    skin_cache: std::collections::HashMap<usize, u32>,
 }
 
 impl<'a> Builder<'a> {
@@ -216,10 +221,18 @@ impl<'a> Builder<'a> {
             total_vertices: 0,
             total_triangles: 0,
             total_animation_keys: 0,
+            skin_influences: Default::default(),
+            skin_cache: Default::default(),
         }
     }
 
     fn build(mut self) -> Result<Scene, SceneError> {
+        // Once per file, whatever uses them: the picture differs from what the author saw.
+        for (i, ext) in self.data.root.extensions_used.iter().enumerate() {
+            if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+                self.ctx.warn(format!("extensionsUsed[{i}]: {ext} is not supported; what it adds is ignored"));
+            }
+        }
         self.scene.textures = self.textures();
         self.scene.materials = self.materials();
         let order = scene_nodes(&mut self.ctx, self.data.root)?;

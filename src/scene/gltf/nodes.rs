@@ -2,7 +2,7 @@
 //! instances of meshes (GPU instancing included), morph weights, cameras and lights.
 
 use super::accessors::read_floats;
-use super::{Builder, CAMERAS, Ctx, LIGHTS, NODES, SCENES, SKINS, lookup, lookup_or_warn};
+use super::{Builder, CAMERAS, Ctx, LIGHTS, NODES, SCENES, lookup, lookup_or_warn};
 use crate::scene::{Camera, Instance, Light, LightKind, Node, SceneError};
 use glam::{Mat4, Quat, Vec3};
 use gltf::json;
@@ -179,12 +179,15 @@ impl Builder<'_> {
             return Ok(());
         };
         let path = format!("nodes[{i}]");
-        if let Some(skin) = node.skin {
-            lookup(&self.ctx, &root.skins, skin.value(), SKINS, &format!("{path}.skin"))?;
-            self.ctx.warn_once("skin", "skins are not supported: skinned meshes are drawn in their bind pose");
-        }
         if let Some(mesh) = node.mesh {
             self.attach_mesh(i, node, mesh.value(), scene_index)?;
+        }
+        if let Some(skin) = node.skin {
+            let primitives = match node.mesh {
+                Some(mesh) => self.mesh(mesh.value(), &format!("{path}.mesh"))?,
+                None => Vec::new(),
+            };
+            self.attach_skin(i, skin.value(), &primitives, scene_index)?;
         }
         if let Some(camera) = node.camera {
             self.attach_camera(&path, camera.value(), scene_index);

@@ -6,7 +6,7 @@ use super::*;
 use crate::scene::animation::Interpolation;
 use crate::scene::{AlphaMode, Filter, LightKind, Sampler, Wrap, tangents, uv_transform};
 use base64::Engine;
-use glam::{Mat3, Quat, Vec2, Vec3, Vec4};
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use serde_json::Value;
 use serde_json::json;
 use std::io::Cursor;
@@ -1054,4 +1054,161 @@ fn mikktspace_reproduces_shipped_tangents() {
         let s = Vec4::from(mesh.vertices[shipped as usize].tangent);
         assert!(g.truncate().dot(s.truncate()) > 0.95 && g.w == s.w, "{g} vs {s}");
     }
+}
+
+// ---- Skins ---------------------------------------------------------------------------------
+
+/// A triangle skinned to two joints (nodes 1 and 2, the second a child of the first one unit
+/// up), its vertices weighted (2, 2) to both, (1, 0) and (0, 1): weights are normalised on
+/// load. Joint 2 turns 90 degrees about Z over the first second and holds for one more.
+fn skinned_triangle() -> Gltf {
+    let mut g = Gltf::triangle();
+    let normals = g.float_accessor(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3", 3);
+    let view = g.view(&u16s(&[0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0]));
+    let joints = g.accessor(view, USHORT, 3, "VEC4");
+    let weights = g.float_accessor(&[2.0, 2.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0], "VEC4", 3);
+    g.primitive()["attributes"]["NORMAL"] = json!(normals);
+    g.primitive()["attributes"]["JOINTS_0"] = json!(joints);
+    g.primitive()["attributes"]["WEIGHTS_0"] = json!(weights);
+    let up = Mat4::from_translation(Vec3::Y).inverse();
+    let ibm = g.float_accessor(&[Mat4::IDENTITY.to_cols_array(), up.to_cols_array()].concat(), "MAT4", 2);
+    g.push("nodes", json!({"children": [2]}));
+    g.push("nodes", json!({"translation": [0.0, 1.0, 0.0]}));
+    g.json["nodes"][0]["skin"] = json!(0);
+    g.json["nodes"][0]["translation"] = json!([5.0, 0.0, 0.0]);
+    g.json["scenes"][0]["nodes"] = json!([0, 1]);
+    g.json["skins"] = json!([{"joints": [1, 2], "inverseBindMatrices": ibm}]);
+    let times = g.float_accessor(&[0.0, 1.0, 2.0], "SCALAR", 3);
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let turns = g.float_accessor(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, s, s, 0.0, 0.0, s, s], "VEC4", 3);
+    g.json["animations"] = json!([{"samplers": [{"input": times, "output": turns}],
+        "channels": [{"sampler": 0, "target": {"node": 2, "path": "rotation"}}]}]);
+    g
+}
+
+#[test]
+fn loads_skins_and_skins_on_the_cpu() {
+    let dir = TempDir::new("skin");
+    let scene = load(&skinned_triangle().write_gltf(&dir, "skin")).unwrap();
+    assert_consistent(&scene);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!((scene.skins.len(), scene.skinned.len()), (1, 1));
+    let skinned = &scene.skinned[0];
+    let skin = &scene.skins[skinned.skin as usize];
+    assert_eq!(
+        skin.joints.iter().map(|&j| scene.nodes[j as usize].translation).collect::<Vec<_>>(),
+        [Vec3::ZERO, Vec3::Y]
+    );
+    assert_eq!(skinned.influences[0].weights, [0.5, 0.5, 0.0, 0.0]);
+    // At t = 1 joint 2 has turned (0, 0) about (0, 1) to (1, 1), and (0, 1) stays.
+    let pose = scene.evaluate(1.0);
+    let joints = skin.joint_matrices(&pose, skinned.node);
+    let v = skinned.skin(&scene.meshes[skinned.mesh as usize].vertices, &joints);
+    let world = |i: usize| pose.world[skinned.node as usize].transform_point3(Vec3::from(v[i].position));
+    for (i, expected) in [(0, Vec3::new(0.5, 0.5, 0.0)), (1, Vec3::X), (2, Vec3::new(0.0, 1.0, 0.0))] {
+        assert!((world(i) - expected).length() < 1e-5, "vertex {i}: {} vs {expected}", world(i));
+    }
+    // The skinned node's own translation (x = 5) is not applied: glTF ignores it.
+    let bind = skinned
+        .skin(&scene.meshes[skinned.mesh as usize].vertices, &skin.joint_matrices(&scene.evaluate(0.0), skinned.node));
+    assert!(
+        (pose.world[skinned.node as usize].transform_point3(Vec3::from(bind[1].position)) - Vec3::X).length() < 1e-5
+    );
+}
+
+#[test]
+fn hostile_skins_fail_with_the_field_named() {
+    let cases: &[Case<Gltf>] = &[
+        (
+            "joint past the count",
+            |g| {
+                let view = g.view(&u16s(&[7, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]));
+                let joints = g.accessor(view, USHORT, 3, "VEC4");
+                g.primitive()["attributes"]["JOINTS_0"] = json!(joints);
+            },
+            "attributes.JOINTS_0: vertex 0 names joint 7, but skins[0] has 2 joints",
+        ),
+        (
+            "float joints",
+            |g| {
+                let joints = g.float_accessor(&[0.0; 12], "VEC4", 3);
+                g.primitive()["attributes"]["JOINTS_0"] = json!(joints);
+            },
+            "joint indices must be unsigned",
+        ),
+        ("skin out of range", |g| g.json["nodes"][0]["skin"] = json!(4), "nodes[0].skin: skin 4 out of range"),
+        (
+            "joint not in the scene",
+            |g| {
+                g.push("nodes", json!({}));
+                g.json["skins"][0]["joints"] = json!([1, 3]);
+            },
+            "skins[0].joints[1]: node 3 is not in the loaded scene",
+        ),
+        (
+            "joint out of range",
+            |g| g.json["skins"][0]["joints"] = json!([1, 9]),
+            "skins[0].joints[1]: node 9 out of range",
+        ),
+        (
+            "too few inverse bind matrices",
+            |g| {
+                let one = g.float_accessor(&Mat4::IDENTITY.to_cols_array(), "MAT4", 1);
+                g.json["skins"][0]["inverseBindMatrices"] = json!(one);
+            },
+            "inverseBindMatrices: 1 matrices for 2 joints",
+        ),
+        (
+            "NaN inverse bind matrix",
+            |g| {
+                let bad = g.float_accessor(&[[f32::NAN; 16], Mat4::IDENTITY.to_cols_array()].concat(), "MAT4", 2);
+                g.json["skins"][0]["inverseBindMatrices"] = json!(bad);
+            },
+            "inverseBindMatrices: matrix 0 is not finite",
+        ),
+        ("skeleton cycle", |g| g.json["nodes"][2]["children"] = json!([1]), "node cycle"),
+        ("no joints", |g| g.json["skins"][0]["joints"] = json!([]), "skins[0].joints: a skin needs at least one joint"),
+    ];
+    let dir = TempDir::new("hostile-skins");
+    for (name, change, needle) in cases {
+        let mut g = skinned_triangle();
+        change(&mut g);
+        let path = g.write_gltf(&dir, &name.replace(' ', "-"));
+        assert_error(load(&path), &path, &[needle]);
+    }
+    // More joints than the limit allows.
+    let path = skinned_triangle().write_gltf(&dir, "joints-limit");
+    assert_error(load_with(&path, |o| o.limits.max_joints = 1), &path, &["max_joints", "--max-joints"]);
+}
+
+#[test]
+fn unusable_weights_fall_back_with_a_warning() {
+    let mut g = skinned_triangle();
+    let weights = g.float_accessor(&[f32::NAN, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0], "VEC4", 3);
+    g.primitive()["attributes"]["WEIGHTS_0"] = json!(weights);
+    let dir = TempDir::new("weights");
+    let scene = load(&g.write_gltf(&dir, "weights")).unwrap();
+    assert_warning(&scene, "WEIGHTS_0: non-finite or negative weights count as 0");
+    assert_warning(&scene, "WEIGHTS_0: 2 vertices have no weight; they keep their bind-pose place");
+    let skinned = &scene.skinned[0];
+    assert_eq!(skinned.influences[0].weights, [0.0, 1.0, 0.0, 0.0]);
+    // A weightless vertex stays where the skinned node puts it, whatever the joints do.
+    let pose = scene.evaluate(1.0);
+    let joints = scene.skins[0].joint_matrices(&pose, skinned.node);
+    let base = &scene.meshes[skinned.mesh as usize].vertices;
+    assert_eq!(skinned.skin(base, &joints)[1].position, base[1].position);
+}
+
+#[test]
+fn unsupported_extensions_in_use_are_named_once() {
+    let mut g = Gltf::triangle();
+    g.json["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_sheen"]);
+    g.json["materials"] = json!([{"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}]);
+    g.primitive()["material"] = json!(0);
+    g.push("meshes", json!({"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}));
+    let dir = TempDir::new("extensions");
+    let scene = load(&g.write_gltf(&dir, "extensions")).unwrap();
+    assert_warning(&scene, "extensionsUsed[1]: KHR_materials_transmission is not supported");
+    assert_warning(&scene, "extensionsUsed[2]: KHR_materials_sheen is not supported");
+    assert!(scene.warnings.iter().all(|w| !w.contains("KHR_lights_punctual")), "{:?}", scene.warnings);
 }
