@@ -76,13 +76,7 @@ impl Deformer {
         if self.pending.is_empty() {
             return;
         }
-        let mut readers = vk::PipelineStageFlags2::VERTEX_SHADER
-            | vk::PipelineStageFlags2::FRAGMENT_SHADER
-            | vk::PipelineStageFlags2::COMPUTE_SHADER;
-        if self.ray_query {
-            readers |= vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
-        }
-        let reads = vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_STORAGE_READ;
+        let (readers, reads) = vertex_readers(self.ray_query);
         let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
         rec.memory_barrier((readers, reads), transfer);
         let regions: Vec<(u64, u64, u64)> = self.pending.iter().map(|&k| self.regions[k]).collect();
@@ -90,4 +84,16 @@ impl Deformer {
         rec.memory_barrier(transfer, (readers, reads));
         self.pending.clear();
     }
+}
+
+/// Who reads the scene's vertex buffer, for the barriers around writing it: draws, shaders,
+/// and with ray query the acceleration-structure builds.
+pub(super) fn vertex_readers(ray_query: bool) -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
+    let mut stages = vk::PipelineStageFlags2::VERTEX_SHADER
+        | vk::PipelineStageFlags2::FRAGMENT_SHADER
+        | vk::PipelineStageFlags2::COMPUTE_SHADER;
+    if ray_query {
+        stages |= vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
+    }
+    (stages, vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_STORAGE_READ)
 }

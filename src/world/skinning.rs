@@ -180,13 +180,7 @@ impl Skinner {
         if self.pending.is_empty() {
             return;
         }
-        let mut readers = vk::PipelineStageFlags2::VERTEX_SHADER
-            | vk::PipelineStageFlags2::FRAGMENT_SHADER
-            | vk::PipelineStageFlags2::COMPUTE_SHADER;
-        if self.ray_query {
-            readers |= vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
-        }
-        let reads = vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_STORAGE_READ;
+        let (readers, reads) = super::deform::vertex_readers(self.ray_query);
         let write = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
         // Last frame's skinning wrote what this one overwrites: its writes are ordered too.
         rec.memory_barrier((readers, reads | vk::AccessFlags2::SHADER_STORAGE_WRITE), write);
