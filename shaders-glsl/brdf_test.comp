@@ -30,7 +30,7 @@ layout(push_constant) uniform Params {
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= params.count) return;
-    BrdfInput m = BrdfInput(params.base_color, params.metallic, params.roughness);
+    BrdfInput m = BrdfInput(params.base_color, params.metallic, params.roughness, GLTF_DIELECTRIC_F0);
     vec3 n = vec3(0.0, 0.0, 1.0);
     vec3 v = vec3(sqrt(max(0.0, 1.0 - params.cos_view * params.cos_view)), 0.0, params.cos_view);
     if (params.mode == 0u) {

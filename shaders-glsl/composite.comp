@@ -40,7 +40,7 @@ void main() {
     vec3 n = imageLoad(g_normal, px).xyz;
     vec3 v = normalize(frame.camera_pos - p);
     vec4 mr = imageLoad(g_metal_rough, px);
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
 
     vec4 vis = imageLoad(in_visibility, px);
     vec3 radiance = imageLoad(g_emissive, px).rgb;

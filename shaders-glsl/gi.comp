@@ -92,7 +92,7 @@ void main() {
         if (resampled) imageStore(out_reservoir, px, reservoir_pack(reservoir_empty()));
         return;
     }
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
     float depth = imageLoad(g_depth, px).r;
     vec3 n = imageLoad(g_normal, px).xyz;

@@ -5,11 +5,14 @@
 // power heuristic wherever both can produce the same direction (emissive triangles, the
 // environment); lights that are not geometry (punctual, sphere, disk) are reached only by light
 // sampling and count with weight 1. Russian roulette from the fourth vertex on. Alpha-masked
-// surfaces pass through (the trace interface tests alpha). Samples are summed into
+// surfaces pass through (the trace interface tests alpha). Transmissive surfaces refract or let
+// light through (common/transmission.glsl); light samples do not cross them (their shadow rays
+// stop there), so light reaches through glass by BSDF sampling alone. Samples are summed into
 // pathtrace.accum; pathtrace.color is the mean so far.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
+#include "common/transmission.glsl"
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
@@ -47,8 +50,11 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);
     // Density of the BSDF sample that made the current ray; 0 for the camera ray, whose hits
-    // on emitters are not also reachable by light sampling (no MIS).
+    // on emitters are not also reachable by light sampling (no MIS), and for rays that crossed
+    // a transmissive surface, which light sampling does not cross either.
     float bsdf_pdf = 0.0;
+    // Beer-Lambert coefficient of the volume the ray travels in (0 outside every volume).
+    vec3 absorption = vec3(0.0);
     for (uint vertex = 0u;; ++vertex) {
         Hit h = trace_closest(origin, dir, 0.0, TRACE_FAR, RAY_MASK_ALL);
         ++rays;
@@ -57,6 +63,7 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
             radiance += throughput * env_eval(dir) * w;
             break;
         }
+        if (any(greaterThan(absorption, vec3(0.0)))) throughput *= exp(-absorption * h.t);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         if (emitter_visible_side(h.instance, h.primitive, dir)) {
             float w = bsdf_pdf > 0.0 ? mis_power(bsdf_pdf, light_pdf_emitter(h.instance, h.primitive, origin, s.position))
@@ -65,38 +72,75 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
         }
         if (vertex >= params.max_bounces) break;
 
-        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
+        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(s.mat.ior));
         vec3 v = -dir;
         vec3 n = s.normal;
         vec3 ng = s.normal_geo;
-        vec3 leave = offset_ray(s.position, ng);
+        float transmission = s.mat.transmission;
+        // What the reflection is sampled from: the same lobes with the diffuse one shrunk by
+        // the transmitted share (exactly so for dielectrics; any such density is unbiased), so
+        // clear glass draws its reflections from the specular lobe alone.
+        BrdfInput m_reflect = m;
+        m_reflect.base_color *= 1.0 - transmission;
 
-        // Next-event estimation. Directions below the geometric surface would start inside it.
-        NeeSample ls = light_sample(leave, rng_next3(rng));
-        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0) {
-            vec3 f = brdf_eval_cos(m, n, v, ls.dir);
-            if (dot(f, f) > 0.0) {
-                ++rays;
-                if (!trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
-                    float w = ls.pdf > 0.0 ? mis_power(ls.pdf, brdf_pdf(m, n, v, ls.dir)) : 1.0;
-                    radiance += throughput * f * ls.weight * w;
+        if (transmission > 0.0 && !s.mat.thin_walled && !s.front) {
+            // Inside a volume: the bare interface reflects or lets the path out. Lights are
+            // outside, behind this very surface: no light sample.
+            TransmissionSample ts = interface_sample(s.mat.roughness, s.mat.ior, n, v, rng_next3(rng));
+            if (dot(ts.weight, ts.weight) <= 0.0) break;
+            throughput *= ts.weight;
+            bsdf_pdf = 0.0;
+            if (ts.crossed) absorption = vec3(0.0);
+            origin = offset_ray(s.position, ts.crossed ? -ng : ng);
+            dir = ts.l;
+        } else {
+            vec3 leave = offset_ray(s.position, ng);
+            // Next-event estimation. Directions below the geometric surface would start
+            // inside it; a transmissive surface reflects only what it does not let through.
+            NeeSample ls = light_sample(leave, rng_next3(rng));
+            if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0) {
+                vec3 f = transmission > 0.0 ? reflection_eval_cos(m, transmission, n, v, ls.dir) : brdf_eval_cos(m, n, v, ls.dir);
+                if (dot(f, f) > 0.0) {
+                    ++rays;
+                    if (!trace_any(leave, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL)) {
+                        float p_reflect = transmission > 0.0 ? 1.0 - transmitted_share(m, transmission, n, v) : 1.0;
+                        float w = ls.pdf > 0.0 ? mis_power(ls.pdf, p_reflect * brdf_pdf(m_reflect, n, v, ls.dir)) : 1.0;
+                        radiance += throughput * f * ls.weight * w;
+                    }
                 }
             }
-        }
 
-        // Continue the path by sampling the BSDF.
-        BrdfSample bs = brdf_sample(m, n, v, rng_next3(rng));
-        if (bs.pdf <= 0.0 || dot(bs.l, ng) <= 0.0) break;
-        throughput *= bs.weight;
-        bsdf_pdf = bs.pdf;
+            // Continue the path: through the surface (transmissive materials, with the
+            // probability transmitted_share), else by sampling the reflecting BSDF.
+            float p_t = transmission > 0.0 ? transmitted_share(m, transmission, n, v) : 0.0;
+            if (p_t > 0.0 && rng_next(rng) < p_t) {
+                TransmissionSample ts = transmission_sample(m, s.mat.thin_walled, s.mat.ior, n, v, rng_next2(rng));
+                if (dot(ts.weight, ts.weight) <= 0.0) break;
+                throughput *= ts.weight * (transmission * (1.0 - m.metallic) / p_t);
+                bsdf_pdf = 0.0;
+                if (!s.mat.thin_walled) absorption = s.mat.absorption;
+                origin = offset_ray(s.position, -ng);
+                dir = ts.l;
+            } else {
+                BrdfSample bs = brdf_sample(m_reflect, n, v, rng_next3(rng));
+                if (bs.pdf <= 0.0 || dot(bs.l, ng) <= 0.0) break;
+                if (p_t > 0.0) {
+                    bsdf_pdf = bs.pdf * (1.0 - p_t);
+                    throughput *= reflection_eval_cos(m, transmission, n, v, bs.l) / bsdf_pdf;
+                } else {
+                    throughput *= bs.weight;
+                    bsdf_pdf = bs.pdf;
+                }
+                origin = leave;
+                dir = bs.l;
+            }
+        }
         if (vertex >= RR_START) {
             // Survival probability follows the throughput (capped so bright paths still end).
             float q = clamp(max3(throughput), 0.05, 0.95);
             if (rng_next(rng) >= q) break;
             throughput /= q;
         }
-        origin = leave;
-        dir = bs.l;
     }
     return radiance;
 }

@@ -64,7 +64,7 @@ void main() {
     vec3 p = world_position(px, depth);
     vec3 v = -camera_ray_dir(vec2(px) + 0.5 - frame.jitter);
     vec4 mr = imageLoad(g_metal_rough, px);
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
     vec3 f0 = brdf_f0(m);
     float n_dot_v = max(dot(n, v), 1e-4);
 

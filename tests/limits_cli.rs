@@ -31,6 +31,37 @@ fn data_uri_scene(dir: &Path) -> PathBuf {
     path
 }
 
+/// The same triangle skinned to two joints (the default scene has no skin).
+fn skinned_scene(dir: &Path) -> PathBuf {
+    let floats = |v: &[f32]| v.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>();
+    let mut bin = floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    bin.extend([0u16, 1, 0, 0].repeat(3).iter().flat_map(|v| v.to_le_bytes()));
+    bin.extend(floats(&[0.5, 0.5, 0.0, 0.0].repeat(3)));
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let gltf = json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": uri, "byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 24},
+            {"buffer": 0, "byteOffset": 60, "byteLength": 48},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "VEC4"},
+            {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC4"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "JOINTS_0": 1, "WEIGHTS_0": 2}}]}],
+        "skins": [{"joints": [1, 2]}],
+        "nodes": [{"mesh": 0, "skin": 0}, {"children": [2]}, {}],
+        "scenes": [{"nodes": [0, 1]}],
+    });
+    let path = dir.join("skinned.gltf");
+    std::fs::write(&path, serde_json::to_vec(&gltf).unwrap()).unwrap();
+    path
+}
+
 fn temp_dir() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("hybrid-rt-limits-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -55,10 +86,11 @@ fn each_limit_flag_stops_the_load_with_a_clear_error() {
     let dir = temp_dir();
     let cornell = default_scene();
     let data_uri = data_uri_scene(&dir);
+    let skinned = skinned_scene(&dir);
     // (flag, a value too small for the scene, the limit and value the message must give). The
     // default scene has 17 nodes two deep, meshes of 6 to 2880 indices, two textures and one
     // animation.
-    let cases: [(&str, &str, &Path, &str); 11] = [
+    let cases: [(&str, &str, &Path, &str); 12] = [
         ("--max-triangles", "1", &cornell, "3 * max_triangles + 2 = 5"),
         ("--max-vertices", "3", &cornell, "max_vertices = 3"),
         ("--max-texture-size", "1", &cornell, "max_texture_dimension = 1"),
@@ -70,6 +102,7 @@ fn each_limit_flag_stops_the_load_with_a_clear_error() {
         ("--max-data-uri-mib", "0", &data_uri, "max_data_uri_bytes = 0"),
         ("--max-instances", "1", &cornell, "max_instances = 1"),
         ("--max-animation-keys", "1", &cornell, "max_animation_keys = 1"),
+        ("--max-joints", "1", &skinned, "max_joints = 1"),
     ];
     let tested: Vec<&str> = cases.iter().map(|c| c.0).collect();
     for (_, flag) in FLAGS {

@@ -4,7 +4,8 @@
 //
 // How the two lobes share the light is the model (brdf_model, src/world/brdf.rs BrdfModel):
 // - BRDF_MODEL_GLTF (the default): glTF 2.0 Appendix B exactly. The dielectric is
-//   fresnel_mix(Lambert, GGX) with F = 0.04 + 0.96 (1 - |v.h|)^5, the metal is the GGX layer
+//   fresnel_mix(Lambert, GGX) with F = F0 + (1 - F0) (1 - |v.h|)^5 (F0 = 0.04 unless
+//   KHR_materials_ior says otherwise), the metal is the GGX layer
 //   with Schlick Fresnel on baseColor, and the material is their mix by metallic. Its specular
 //   part is one GGX lobe with Schlick Fresnel at F0 = mix(0.04, baseColor, metallic); its
 //   diffuse part is baseColor (1 - metallic) / pi weighted by 1 - F_dielectric(v.h).
@@ -59,9 +60,20 @@ struct BrdfInput {
     vec3 base_color;
     float metallic;
     float roughness;
+    // The dielectric's reflectance at normal incidence: glTF's 0.04 (IOR 1.5), or
+    // dielectric_f0(ior) where KHR_materials_ior is read (the reference path tracer).
+    float dielectric_f0;
 };
 
-vec3 brdf_f0(BrdfInput m) { return mix(vec3(0.04), m.base_color, m.metallic); }
+// glTF's dielectric F0 without KHR_materials_ior.
+#define GLTF_DIELECTRIC_F0 0.04
+
+float dielectric_f0(float ior) {
+    float r = (ior - 1.0) / (ior + 1.0);
+    return r * r;
+}
+
+vec3 brdf_f0(BrdfInput m) { return mix(vec3(m.dielectric_f0), m.base_color, m.metallic); }
 vec3 brdf_diffuse_albedo(BrdfInput m) { return m.base_color * (1.0 - m.metallic); }
 
 // Bilinear (A, B) at view cosine mu and roughness.
@@ -92,9 +104,11 @@ vec3 brdf_specular_albedo_avg(BrdfInput m) {
     return brdf_f0(m) * ab.x + ab.y;
 }
 
-// The dielectric's Fresnel (IOR 1.5) at cosine v.h, which splits light between the glTF model's
-// diffuse and specular layers.
-float fresnel_dielectric(float v_dot_h) { return 0.04 + 0.96 * pow(1.0 - clamp(v_dot_h, 0.0, 1.0), 5.0); }
+// The dielectric's Fresnel at cosine v.h, which splits light between the glTF model's diffuse
+// and specular layers.
+float fresnel_dielectric(BrdfInput m, float v_dot_h) {
+    return m.dielectric_f0 + (1.0 - m.dielectric_f0) * pow(1.0 - clamp(v_dot_h, 0.0, 1.0), 5.0);
+}
 
 // The diffuse lobe divided by Lambert's brdf_diffuse_albedo / pi: the weight the model gives
 // diffuse light arriving from l and leaving toward v. The gi pass integrates incident light
@@ -105,7 +119,7 @@ vec3 brdf_diffuse_weight(BrdfInput m, vec3 n, vec3 v, vec3 l) {
         return (1.0 - brdf_specular_albedo(m, max(dot(n, v), 0.0))) * (1.0 - brdf_specular_albedo(m, max(dot(n, l), 0.0))) /
                max(1.0 - brdf_specular_albedo_avg(m), vec3(1e-4));
     }
-    return vec3(1.0 - fresnel_dielectric(dot(v, normalize(v + l))));
+    return vec3(1.0 - fresnel_dielectric(m, dot(v, normalize(v + l))));
 }
 
 // The specular lobe alone: f_spec(v, l) * cos(theta_l).

@@ -29,6 +29,7 @@ struct HitSurface {
     vec3 position;
     vec3 normal_geo;  // world-space face normal, facing the incoming ray
     vec3 normal;      // world-space shading normal (normal-mapped), same hemisphere as normal_geo
+    bool front;       // the ray hit the triangle's front face (outside of a volume)
     uint material;
     SurfaceMaterial mat;
 };
@@ -50,6 +51,7 @@ HitSurface hit_surface(uint instance, uint primitive, vec2 bary, vec3 dir) {
     bool back = dot(ng, dir) > 0.0;
     if (back) ng = -ng;
     s.normal_geo = ng;
+    s.front = !back;
     mat3 nm = mat3(inst.normal_to_world);
     vec3 n = normalize(nm * (w.x * a.normal + w.y * b.normal + w.z * c.normal));
     if (back) n = -n;

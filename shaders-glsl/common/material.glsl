@@ -15,6 +15,10 @@ struct SurfaceMaterial {
     float occlusion;
     vec3 emissive;
     vec3 normal_ts;   // tangent-space normal (0,0,1 when there is no normal map)
+    float transmission;  // share of the dielectric's diffuse light that passes through
+    float ior;
+    bool thin_walled;    // light passes straight through (no volume behind the surface)
+    vec3 absorption;     // Beer-Lambert coefficient per unit length inside the volume
 };
 
 vec2 material_uv(MaterialInfo m, int slot, vec2 uv0, vec2 uv1) {
@@ -65,6 +69,11 @@ SurfaceMaterial read_material(uint material_id, vec2 uv0, vec2 uv1) {
     } else {
         s.normal_ts = vec3(0.0, 0.0, 1.0);
     }
+    s.transmission = m.transmission;
+    s.ior = m.ior;
+    s.thin_walled = m.thickness <= 0.0;
+    // -ln(colour) / distance; a black colour absorbs everything within any finite length.
+    s.absorption = -log(max(m.attenuation_color, vec3(1e-6))) / m.attenuation_distance;
     return s;
 }
 

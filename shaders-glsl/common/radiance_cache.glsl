@@ -218,7 +218,8 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     for (uint vertex = 0u; vertex < vertices; ++vertex) {
-        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness);
+        // The G-buffer carries no IOR: the hybrid frame's paths use glTF's F0 throughout.
+        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, GLTF_DIELECTRIC_F0);
         vec3 v = -dir;
         vec3 leave = offset_ray(s.position, s.normal_geo);
         vec3 f;

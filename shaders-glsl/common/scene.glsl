@@ -49,7 +49,11 @@ struct MaterialInfo {
     int tex[5];         // texture index per slot, -1 when absent
     uint uv_sets;       // bit i set: slot i reads TEXCOORD_1
     uint flags;
-    uint pad;
+    float transmission; // KHR_materials_transmission (0: opaque)
+    float ior;          // KHR_materials_ior
+    float thickness;    // KHR_materials_volume: 0 thin-walled, else the mesh bounds a volume
+    float attenuation_distance;  // +inf: no absorption
+    vec3 attenuation_color;
     vec4 uv_xform[10];  // per slot two rows of the 2x3 KHR_texture_transform matrix
 };
 

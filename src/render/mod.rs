@@ -190,6 +190,14 @@ impl Renderer {
         // Decided on the scene as loaded: lights the plan culls below are still its own.
         let (environment, lighting) = default_light::environment_data(&settings.environment, &scene)?;
         log::info!("lighting of {}: {}", scene.name, lighting.note);
+        let glass = scene.materials.iter().filter(|m| m.is_transmissive()).count();
+        if glass > 0 && !matches!(settings.mode, RenderMode::Reference { .. }) {
+            log::warn!(
+                "{}: {glass} transmissive materials: the reference path tracer refracts through them, the hybrid \
+                 frame does not yet and draws them opaque",
+                scene.name
+            );
+        }
         let plan = if settings.full {
             plan::FramePlan::full(&scene)
         } else {

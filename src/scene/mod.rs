@@ -123,6 +123,18 @@ pub struct Material {
     pub emissive_texture: Option<TextureRef>,
     pub alpha_mode: AlphaMode,
     pub double_sided: bool,
+    /// KHR_materials_transmission: the share of the dielectric's diffuse light that passes
+    /// through the surface instead (0 = opaque).
+    pub transmission: f32,
+    /// KHR_materials_ior: index of refraction of the dielectric (1.5 gives glTF's F0 of 0.04).
+    pub ior: f32,
+    /// KHR_materials_volume: 0 means thin-walled (light passes straight through the surface);
+    /// above 0 the mesh bounds a volume that refracts and absorbs.
+    pub thickness: f32,
+    /// Beer-Lambert absorption in the volume: light keeps `attenuation_color` after
+    /// `attenuation_distance` (infinite: no absorption).
+    pub attenuation_color: Vec3,
+    pub attenuation_distance: f32,
 }
 
 impl Default for Material {
@@ -142,6 +154,11 @@ impl Default for Material {
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            transmission: 0.0,
+            ior: 1.5,
+            thickness: 0.0,
+            attenuation_color: Vec3::ONE,
+            attenuation_distance: f32::INFINITY,
         }
     }
 }
@@ -150,6 +167,12 @@ impl Material {
     /// True when the material emits light (a candidate area light).
     pub fn is_emissive(&self) -> bool {
         self.emissive_factor.max_element() > 0.0
+    }
+
+    /// True when light may pass through the surface (KHR_materials_transmission; where the
+    /// metallic texture makes the surface a metal, none does).
+    pub fn is_transmissive(&self) -> bool {
+        self.transmission > 0.0
     }
 }
 

@@ -84,7 +84,11 @@ pub struct GpuMaterial {
     pub tex: [i32; 5],
     pub uv_sets: u32,
     pub flags: u32,
-    pub pad: u32,
+    pub transmission: f32,
+    pub ior: f32,
+    pub thickness: f32,
+    pub attenuation_distance: f32,
+    pub attenuation_color: [f32; 3],
     pub uv_xform: [[f32; 4]; 10],
 }
 
@@ -438,7 +442,11 @@ fn gpu_material(m: &scene::Material) -> GpuMaterial {
         tex,
         uv_sets,
         flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
-        pad: 0,
+        transmission: m.transmission,
+        ior: m.ior,
+        thickness: m.thickness,
+        attenuation_distance: m.attenuation_distance,
+        attenuation_color: m.attenuation_color.to_array(),
         uv_xform,
     }
 }

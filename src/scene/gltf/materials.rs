@@ -92,7 +92,72 @@ impl Builder<'_> {
             emissive_texture: self.texture_ref(i, "emissiveTexture", m.emissive_texture.as_ref().map(info)),
             alpha_mode: self.alpha_mode(i, m),
             double_sided: m.double_sided,
+            ..self.transmission(i, m)
         }
+    }
+
+    /// KHR_materials_transmission, _ior and _volume (their factors; the transmission and
+    /// thickness textures are not read, with a warning), on an otherwise default material.
+    pub(super) fn transmission(&mut self, i: usize, m: &json::Material) -> Material {
+        let mut out = Material::default();
+        let Some(ext) = m.extensions.as_ref() else {
+            return out;
+        };
+        let path = format!("materials[{i}].extensions");
+        let finite_in = |x: f32, lo: f32, hi: f32| x.is_finite() && (lo..=hi).contains(&x);
+        if let Some(t) = &ext.transmission {
+            let factor = t.transmission_factor.0;
+            if finite_in(factor, 0.0, 1.0) {
+                out.transmission = factor;
+            } else {
+                self.ctx.warn(format!(
+                    "{path}.KHR_materials_transmission.transmissionFactor: {factor} is outside [0, 1]; using 0"
+                ));
+            }
+            if t.transmission_texture.is_some() {
+                self.ctx.warn_once(
+                    "transmission-texture",
+                    "transmissionTexture is not supported: the transmission factor applies alone",
+                );
+            }
+        }
+        if let Some(ior) = &ext.ior {
+            let value = ior.ior.0;
+            if value.is_finite() && value >= 1.0 {
+                out.ior = value;
+            } else {
+                self.ctx.warn(format!("{path}.KHR_materials_ior.ior: {value} is below 1; using 1.5"));
+            }
+        }
+        if let Some(v) = &ext.volume {
+            let (thickness, distance, color) =
+                (v.thickness_factor.0, v.attenuation_distance.0, Vec3::from(v.attenuation_color.0));
+            if thickness.is_finite() && thickness >= 0.0 {
+                out.thickness = thickness;
+            } else {
+                self.ctx
+                    .warn(format!("{path}.KHR_materials_volume.thicknessFactor: {thickness} is negative; thin-walled"));
+            }
+            if distance > 0.0 && !distance.is_nan() {
+                out.attenuation_distance = distance;
+            } else {
+                self.ctx.warn(format!(
+                    "{path}.KHR_materials_volume.attenuationDistance: {distance} is not positive; no absorption"
+                ));
+            }
+            if color.is_finite() && color.cmpge(Vec3::ZERO).all() && color.cmple(Vec3::ONE).all() {
+                out.attenuation_color = color;
+            } else {
+                self.ctx.warn(format!("{path}.KHR_materials_volume.attenuationColor: outside [0, 1]; white"));
+            }
+            if v.thickness_texture.is_some() {
+                self.ctx.warn_once(
+                    "thickness-texture",
+                    "thicknessTexture is not supported: the thickness factor applies alone",
+                );
+            }
+        }
+        out
     }
 
     /// The texture slot at JSON pointer `slot` (relative to the material), given its texture

@@ -1202,13 +1202,47 @@ fn unusable_weights_fall_back_with_a_warning() {
 #[test]
 fn unsupported_extensions_in_use_are_named_once() {
     let mut g = Gltf::triangle();
-    g.json["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_sheen"]);
-    g.json["materials"] = json!([{"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}]);
+    g.json["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_clearcoat", "KHR_materials_sheen"]);
+    g.json["materials"] = json!([{"extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0}}}]);
     g.primitive()["material"] = json!(0);
-    g.push("meshes", json!({"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}));
     let dir = TempDir::new("extensions");
     let scene = load(&g.write_gltf(&dir, "extensions")).unwrap();
-    assert_warning(&scene, "extensionsUsed[1]: KHR_materials_transmission is not supported");
+    assert_warning(&scene, "extensionsUsed[1]: KHR_materials_clearcoat is not supported");
     assert_warning(&scene, "extensionsUsed[2]: KHR_materials_sheen is not supported");
     assert!(scene.warnings.iter().all(|w| !w.contains("KHR_lights_punctual")), "{:?}", scene.warnings);
+}
+
+#[test]
+fn transmission_ior_and_volume_load_and_bad_values_fall_back() {
+    let mut g = Gltf::triangle();
+    g.json["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"]);
+    g.json["materials"] = json!([
+        {"extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 0.75},
+            "KHR_materials_ior": {"ior": 1.33},
+            "KHR_materials_volume": {"thicknessFactor": 0.2, "attenuationDistance": 2.0, "attenuationColor": [1.0, 0.5, 0.25]},
+        }},
+        {"extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 3.0, "transmissionTexture": {"index": 0}},
+            "KHR_materials_ior": {"ior": 0.5},
+            "KHR_materials_volume": {"thicknessFactor": -1.0, "attenuationDistance": 0.0},
+        }},
+    ]);
+    g.primitive()["material"] = json!(0);
+    let dir = TempDir::new("transmission");
+    let scene = load(&g.write_gltf(&dir, "transmission")).unwrap();
+    let m = &scene.materials[0];
+    assert_eq!((m.transmission, m.ior, m.thickness, m.attenuation_distance), (0.75, 1.33, 0.2, 2.0));
+    assert_eq!(m.attenuation_color, Vec3::new(1.0, 0.5, 0.25));
+    assert!(m.is_transmissive());
+    let bad = &scene.materials[1];
+    assert_eq!((bad.transmission, bad.ior, bad.thickness, bad.attenuation_distance), (0.0, 1.5, 0.0, f32::INFINITY));
+    assert_warning(
+        &scene,
+        "materials[1].extensions.KHR_materials_transmission.transmissionFactor: 3 is outside [0, 1]",
+    );
+    assert_warning(&scene, "transmissionTexture is not supported");
+    assert_warning(&scene, "materials[1].extensions.KHR_materials_ior.ior: 0.5 is below 1");
+    assert_warning(&scene, "KHR_materials_volume.thicknessFactor: -1 is negative");
+    assert_warning(&scene, "KHR_materials_volume.attenuationDistance: 0 is not positive");
 }
