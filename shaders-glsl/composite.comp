@@ -5,11 +5,13 @@
 //   visibility (the shadows chain, one channel each)
 // + the diffuse signal (gi: emitters, environment, the other punctual lights resampled, every
 //   bounce; demodulated) times the diffuse albedo
-// + the specular signal (reflections, with gi's specular lobe of the resampled lights).
+// + the specular signal (reflections, with gi's specular lobe of the resampled lights, and
+//   what glass lets through).
 // Pixels that hit nothing show the environment.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/brdf.glsl"
+#include "common/transmission.glsl"
 #include "common/lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/light_sampling.glsl"
@@ -42,14 +44,18 @@ void main() {
     vec4 mr = imageLoad(g_metal_rough, px);
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
 
+    // Glass lets the share `transmission` of its diffuse light through instead (reflections
+    // adds what comes through).
+    float transmission = materials[instances[ids.x].material].transmission;
+
     vec4 vis = imageLoad(in_visibility, px);
     vec3 radiance = imageLoad(g_emissive, px).rgb;
     for (uint i = 0u; i < min(frame.light_count, SHADOWED_LIGHTS); ++i) {
         LightSample ls = sample_punctual(lights[i], p);
-        radiance += brdf_eval_cos(m, n, v, ls.dir) * ls.radiance * vis[i];
+        radiance += reflection_eval_cos(m, transmission, n, v, ls.dir) * ls.radiance * vis[i];
     }
     // The diffuse signal is the lobe without its albedo (gi.comp).
-    radiance += brdf_diffuse_albedo(m) * imageLoad(in_diffuse, px).rgb;
+    radiance += (1.0 - transmission) * brdf_diffuse_albedo(m) * imageLoad(in_diffuse, px).rgb;
     radiance += imageLoad(in_specular, px).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

@@ -5,12 +5,14 @@
 // escape see the environment; the radiance cache adds the hit's indirect light. Surfaces
 // rougher than the cut-off trace nothing and take the specular estimate the gi pass made from
 // its own samples (gi.specular); under the cut-off gi.specular holds the lobe's share of the
-// resampled punctual lights, which no ray can hit, and is added. The output is the lobe's
-// contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
-// for the denoiser.
+// resampled punctual lights, which no ray can hit, and is added. Transmissive surfaces add the
+// light they let through (one path through the glass, transmitted_radiance). The output is the
+// lobe's contribution (Fresnel and shadowing included), ready to add; the hit distance goes
+// alongside for the denoiser.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
+#include "common/transmission.glsl"
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
@@ -50,6 +52,49 @@ vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
     return radiance + rc_radiance_leaving(s, dir, h.t, 0u, vertices, true, rc_copy_written(frame.frame_index), rng);
 }
 
+// Light through a transmissive surface toward v (KHR_materials_transmission): one path through
+// it, as the reference traces it (common/transmission.glsl), shaded where it leaves the glass.
+// Inside a volume the interface reflects or lets the path out (Beer-Lambert absorbing on the
+// way); a further transmissive surface is passed through, its reflection left out. The weight
+// excludes the surface's transmitted share, which the caller applies.
+#define TRANSMISSION_EVENTS 8u
+vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInput m, MaterialInfo mi, inout Rng rng) {
+    m.dielectric_f0 = dielectric_f0(mi.ior);
+    bool thin = mi.thickness <= 0.0;
+    TransmissionSample ts = transmission_sample(m, thin, mi.ior, n, v, rng_next2(rng));
+    vec3 weight = ts.weight;
+    if (dot(weight, weight) <= 0.0) return vec3(0.0);
+    vec3 origin = offset_ray_origin(p, -ng, depth);
+    vec3 dir = ts.l;
+    vec3 absorption = thin ? vec3(0.0) : -log(max(mi.attenuation_color, vec3(1e-6))) / mi.attenuation_distance;
+    for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
+        Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
+        if (h.instance == NO_HIT) return weight * env_eval(dir);
+        if (any(greaterThan(absorption, vec3(0.0)))) weight *= exp(-absorption * h.t);
+        HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+        MaterialInfo hm = materials[s.material];
+        float through = hm.transmission * (1.0 - s.mat.metallic);
+        if (through <= 0.0) return weight * shade_hit(h, dir, rng);
+        BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
+        TransmissionSample next;
+        if (hm.thickness > 0.0 && !s.front) {
+            next = interface_sample(s.mat.roughness, hm.ior, s.normal, -dir, rng_next3(rng));
+            if (next.crossed) absorption = vec3(0.0);
+        } else {
+            next = transmission_sample(hm_brdf, hm.thickness <= 0.0, hm.ior, s.normal, -dir, rng_next2(rng));
+            next.weight *= through;
+            if (hm.thickness > 0.0) {
+                absorption = -log(max(hm.attenuation_color, vec3(1e-6))) / hm.attenuation_distance;
+            }
+        }
+        weight *= next.weight;
+        if (dot(weight, weight) <= 0.0) return vec3(0.0);
+        origin = offset_ray(s.position, next.crossed ? -s.normal_geo : s.normal_geo);
+        dir = next.l;
+    }
+    return vec3(0.0);
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
@@ -67,13 +112,19 @@ void main() {
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
     vec3 f0 = brdf_f0(m);
     float n_dot_v = max(dot(n, v), 1e-4);
+    Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
+
+    // Glass: what it lets through joins the specular signal (composite leaves its share out of
+    // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
+    MaterialInfo mi = materials[instances[imageLoad(g_ids, px).x].material];
+    float transmitted = mi.transmission * (1.0 - m.metallic);
+    vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng) : vec3(0.0);
 
     if (m.roughness > params.roughness_cutoff) {
-        imageStore(out_radiance, px, vec4(imageLoad(in_specular, px).rgb, 1.0));
+        imageStore(out_radiance, px, vec4(imageLoad(in_specular, px).rgb + through, 1.0));
         imageStore(out_hit_distance, px, vec4(0.0));
         return;
     }
-    Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
     vec3 origin = offset_ray_origin(p, ng, depth);
     mat3 basis = orthonormal_basis(n);
     vec3 v_local = vec3(dot(v, basis[0]), dot(v, basis[1]), n_dot_v);
@@ -108,6 +159,6 @@ void main() {
             hits += 1.0;
         }
     }
-    imageStore(out_radiance, px, vec4(sum / float(count) + imageLoad(in_specular, px).rgb, 1.0));
+    imageStore(out_radiance, px, vec4(sum / float(count) + imageLoad(in_specular, px).rgb + through, 1.0));
     imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
 }

@@ -192,9 +192,8 @@ impl Renderer {
         log::info!("lighting of {}: {}", scene.name, lighting.note);
         let glass = scene.materials.iter().filter(|m| m.is_transmissive()).count();
         if glass > 0 && !matches!(settings.mode, RenderMode::Reference { .. }) {
-            log::warn!(
-                "{}: {glass} transmissive materials: the reference path tracer refracts through them, the hybrid \
-                 frame does not yet and draws them opaque",
+            log::info!(
+                "{}: {glass} transmissive materials: the reflections pass traces one path per pixel through them",
                 scene.name
             );
         }
