@@ -67,14 +67,16 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
     vec3 origin = offset_ray_origin(p, -ng, depth);
     vec3 dir = ts.l;
     vec3 absorption = thin ? vec3(0.0) : -log(max(mi.attenuation_color, vec3(1e-6))) / mi.attenuation_distance;
+    vec3 emitted = vec3(0.0);  // by the glass surfaces passed on the way
     for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
-        if (h.instance == NO_HIT) return weight * env_eval(dir);
+        if (h.instance == NO_HIT) return emitted + weight * env_eval(dir);
         if (any(greaterThan(absorption, vec3(0.0)))) weight *= exp(-absorption * h.t);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         MaterialInfo hm = materials[s.material];
         float through = hm.transmission * (1.0 - s.mat.metallic);
-        if (through <= 0.0) return weight * shade_hit(h, dir, rng);
+        if (through <= 0.0) return emitted + weight * shade_hit(h, dir, rng);
+        if (emitter_visible_side(h.instance, h.primitive, dir)) emitted += weight * s.mat.emissive;
         BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
         TransmissionSample next;
         if (hm.thickness > 0.0 && !s.front) {
@@ -88,11 +90,11 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
             }
         }
         weight *= next.weight;
-        if (dot(weight, weight) <= 0.0) return vec3(0.0);
+        if (dot(weight, weight) <= 0.0) return emitted;
         origin = offset_ray(s.position, next.crossed ? -s.normal_geo : s.normal_geo);
         dir = next.l;
     }
-    return vec3(0.0);
+    return emitted;
 }
 
 void main() {
