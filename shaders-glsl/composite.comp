@@ -46,7 +46,11 @@ void main() {
 
     // Glass lets the share `transmission` of its diffuse light through instead (reflections
     // adds what comes through).
-    float transmission = materials[instances[ids.x].material].transmission;
+    MaterialInfo mi = materials[instances[ids.x].material];
+    float transmission = mi.transmission;
+    // A blended surface covers the share alpha of the pixel; reflections adds what shows
+    // through the rest.
+    float cover = (mi.flags & MATERIAL_BLEND) != 0u ? imageLoad(g_base_color, px).a : 1.0;
 
     vec4 vis = imageLoad(in_visibility, px);
     vec3 radiance = imageLoad(g_emissive, px).rgb;
@@ -56,6 +60,6 @@ void main() {
     }
     // The diffuse signal is the lobe without its albedo (gi.comp).
     radiance += (1.0 - transmission) * brdf_diffuse_albedo(m) * imageLoad(in_diffuse, px).rgb;
-    radiance += imageLoad(in_specular, px).rgb;
+    radiance = cover * radiance + imageLoad(in_specular, px).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

@@ -7,7 +7,9 @@
 // sampling and count with weight 1. Russian roulette from the fourth vertex on. Alpha-masked
 // surfaces pass through (the trace interface tests alpha). Transmissive surfaces refract or let
 // light through (common/transmission.glsl); light samples do not cross them (their shadow rays
-// stop there), so light reaches through glass by BSDF sampling alone. Samples are summed into
+// stop there), so light reaches through glass by BSDF sampling alone. Blended surfaces (alphaMode
+// BLEND) cover the share alpha of each point: a path passes straight through with probability
+// 1 - alpha (shadow rays see them masked at alpha 0.5). Samples are summed into
 // pathtrace.accum; pathtrace.color is the mean so far.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
@@ -39,6 +41,8 @@ layout(push_constant) uniform Params {
 #define SALT_PATHTRACE 0x70617468u
 // Vertices before Russian roulette starts (camera hit = vertex 0).
 #define RR_START 3u
+// Blended surfaces a path passes through at most (then they count as covering).
+#define BLEND_PASSES 16u
 // Longest closest-hit ray (as shadow_ray_tmax for lights at infinity).
 #define TRACE_FAR 1e6
 
@@ -55,7 +59,14 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
     float bsdf_pdf = 0.0;
     // Beer-Lambert coefficient of the volume the ray travels in (0 outside every volume).
     vec3 absorption = vec3(0.0);
+    // The vertex the current ray left (blended surfaces passed on the way do not count), from
+    // which light sampling would have reached what the ray hits.
+    vec3 mis_origin = origin;
+    bool passed = false;
+    uint blend_passes = 0u;
     for (uint vertex = 0u;; ++vertex) {
+        if (!passed) mis_origin = origin;
+        passed = false;
         Hit h = trace_closest(origin, dir, 0.0, TRACE_FAR, RAY_MASK_ALL);
         ++rays;
         if (h.instance == NO_HIT) {
@@ -65,8 +76,18 @@ vec3 trace_path(vec2 pixel, inout Rng rng, inout uint rays) {
         }
         if (any(greaterThan(absorption, vec3(0.0)))) throughput *= exp(-absorption * h.t);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+        // A blended surface covers the share alpha of each point; the rest of the light passes
+        // straight through it, which is no scattering event.
+        if ((materials[s.material].flags & MATERIAL_BLEND) != 0u && blend_passes < BLEND_PASSES &&
+            rng_next(rng) >= s.mat.base_color.a) {
+            ++blend_passes;
+            passed = true;
+            origin = offset_ray(s.position, -s.normal_geo);
+            --vertex;  // wraps for the camera ray; the loop's increment brings it back
+            continue;
+        }
         if (emitter_visible_side(h.instance, h.primitive, dir)) {
-            float w = bsdf_pdf > 0.0 ? mis_power(bsdf_pdf, light_pdf_emitter(h.instance, h.primitive, origin, s.position))
+            float w = bsdf_pdf > 0.0 ? mis_power(bsdf_pdf, light_pdf_emitter(h.instance, h.primitive, mis_origin, s.position))
                                      : 1.0;
             radiance += throughput * s.mat.emissive * w;
         }

@@ -97,6 +97,23 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
     return emitted;
 }
 
+// What a blended surface lets through toward v: the view ray continued past it, through further
+// blended surfaces with the chance of their uncovered share, shaded where it stops.
+#define BLEND_LAYERS 4u
+vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng) {
+    vec3 origin = offset_ray_origin(p, -ng, depth);
+    vec3 dir = -v;
+    for (uint layer = 0u; layer < BLEND_LAYERS; ++layer) {
+        Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
+        if (h.instance == NO_HIT) return env_eval(dir);
+        HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+        bool blended = (materials[s.material].flags & MATERIAL_BLEND) != 0u;
+        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) return shade_hit(h, dir, rng);
+        origin = offset_ray(s.position, -s.normal_geo);
+    }
+    return vec3(0.0);
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
@@ -121,9 +138,17 @@ void main() {
     MaterialInfo mi = materials[instances[imageLoad(g_ids, px).x].material];
     float transmitted = mi.transmission * (1.0 - m.metallic);
     vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng) : vec3(0.0);
+    // A blended surface covers the share alpha of the pixel (composite scales its own light by
+    // it); the rest shows what lies behind, added here.
+    float cover = 1.0;
+    vec3 behind = vec3(0.0);
+    if ((mi.flags & MATERIAL_BLEND) != 0u) {
+        cover = imageLoad(g_base_color, px).a;
+        if (cover < 1.0) behind = (1.0 - cover) * behind_blend(p, ng, v, depth, rng);
+    }
 
     if (m.roughness > params.roughness_cutoff) {
-        imageStore(out_radiance, px, vec4(imageLoad(in_specular, px).rgb + through, 1.0));
+        imageStore(out_radiance, px, vec4(cover * (imageLoad(in_specular, px).rgb + through) + behind, 1.0));
         imageStore(out_hit_distance, px, vec4(0.0));
         return;
     }
@@ -161,6 +186,6 @@ void main() {
             hits += 1.0;
         }
     }
-    imageStore(out_radiance, px, vec4(sum / float(count) + imageLoad(in_specular, px).rgb + through, 1.0));
+    imageStore(out_radiance, px, vec4(cover * (sum / float(count) + imageLoad(in_specular, px).rgb + through) + behind, 1.0));
     imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
 }

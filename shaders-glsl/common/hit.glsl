@@ -14,15 +14,22 @@ uvec3 hit_triangle(uint instance, uint primitive) {
 
 vec3 barycentric_weights(vec2 bary) { return vec3(1.0 - bary.x - bary.y, bary.x, bary.y); }
 
-// True when the candidate hit should count: the material is opaque, or its alpha passes.
+// Set by the trace functions for the ray being traced: true for shadow and visibility queries
+// (any hit ends them), false for closest hits.
+bool hit_shadow_query = false;
+
+// True when the candidate hit should count: the material is opaque, or its alpha passes (for
+// blended materials, the least alpha drawn; for shadow queries, BLEND_SHADOW_CUTOFF).
 bool hit_alpha_accept(uint instance, uint primitive, vec2 bary) {
     uint material = instances[instance].material;
-    if (materials[material].alpha_cutoff < 0.0) return true;
+    float cutoff = materials[material].alpha_cutoff;
+    if (cutoff < 0.0) return true;
+    if (hit_shadow_query && (materials[material].flags & MATERIAL_BLEND) != 0u) cutoff = BLEND_SHADOW_CUTOFF;
     uvec3 tri = hit_triangle(instance, primitive);
     vec3 w = barycentric_weights(bary);
     vec2 uv0 = w.x * vertices[tri.x].uv0 + w.y * vertices[tri.y].uv0 + w.z * vertices[tri.z].uv0;
     vec2 uv1 = w.x * vertices[tri.x].uv1 + w.y * vertices[tri.y].uv1 + w.z * vertices[tri.z].uv1;
-    return material_alpha_passes(material, uv0, uv1);
+    return material_alpha(material, uv0, uv1) >= cutoff;
 }
 
 struct HitSurface {

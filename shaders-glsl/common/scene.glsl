@@ -37,6 +37,11 @@ struct InstanceInfo {
 #define TEX_EMISSIVE 4
 
 #define MATERIAL_DOUBLE_SIDED 1u
+// alphaMode BLEND: the surface covers the share alpha of each point, the rest passes straight
+// through. alpha_cutoff is then the least alpha still drawn; shadow rays treat the surface as
+// masked at BLEND_SHADOW_CUTOFF.
+#define MATERIAL_BLEND 2u
+#define BLEND_SHADOW_CUTOFF 0.5
 
 struct MaterialInfo {
     vec4 base_color_factor;

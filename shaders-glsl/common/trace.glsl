@@ -43,6 +43,7 @@ layout(set = 0, binding = 8) uniform accelerationStructureEXT scene_tlas;
     }
 
 bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
+    hit_shadow_query = true;
     rayQueryEXT q;
     rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsTerminateOnFirstHitEXT, mask, origin, tmin, dir, tmax);
     TRACE_RUN(q);
@@ -50,6 +51,7 @@ bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
 }
 
 Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
+    hit_shadow_query = first_hit;
     rayQueryEXT q;
     uint flags = first_hit ? gl_RayFlagsTerminateOnFirstHitEXT : gl_RayFlagsNoneEXT;
     rayQueryInitializeEXT(q, scene_tlas, flags, mask, origin, tmin, dir, tmax);

@@ -69,12 +69,17 @@ impl FramePlan {
             .filter(|m| min_roughness(scene, m.roughness_factor, m.metallic_roughness_texture) <= roughness_cutoff)
             .map(|m| m.name.as_str())
             .collect();
-        // Glass of any roughness: the reflections pass traces what it lets through.
-        let glass: Vec<&str> =
-            scene.materials.iter().filter(|m| m.is_transmissive()).map(|m| m.name.as_str()).collect();
+        // Glass and blended materials of any roughness: the reflections pass traces what they
+        // let through.
+        let glass: Vec<&str> = scene
+            .materials
+            .iter()
+            .filter(|m| m.is_transmissive() || m.alpha_mode == crate::scene::AlphaMode::Blend)
+            .map(|m| m.name.as_str())
+            .collect();
         let reflections = !glossy.is_empty() || !glass.is_empty();
         reasons.push(if !glass.is_empty() && glossy.is_empty() {
-            format!("reflections: traced for what {} transmissive material(s) let through: {}", glass.len(), list(&glass))
+            format!("reflections: traced for what {} transmissive or blended material(s) let through: {}", glass.len(), list(&glass))
         } else if reflections {
             format!("reflections: traced, {} material(s) at or under roughness {roughness_cutoff}: {}", glossy.len(), list(&glossy))
         } else {

@@ -77,8 +77,10 @@ pub enum AlphaMode {
     Mask {
         cutoff: f32,
     },
-    /// glTF BLEND. The deferred frame has no sorted transparency: blended materials are drawn
-    /// as masked at cutoff 0.5 (documented in the README; the loader warns once per scene).
+    /// glTF BLEND, as coverage: the surface covers the share alpha of each point and the rest
+    /// of the light passes straight through (the reference decides per path; the hybrid frame
+    /// traces what lies behind in the reflections pass). Shadow rays see it masked at 0.5
+    /// ([`AlphaMode::cutoff`]).
     Blend,
 }
 

@@ -70,6 +70,10 @@ pub struct GpuInstance {
 }
 
 pub const MATERIAL_DOUBLE_SIDED: u32 = 1;
+/// alphaMode BLEND (common/scene.glsl MATERIAL_BLEND): coverage by alpha.
+pub const MATERIAL_BLEND: u32 = 2;
+/// The least alpha a blended surface is drawn with: texels below it are holes.
+pub const BLEND_VISIBLE_ALPHA: f32 = 1.0 / 256.0;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -434,14 +438,18 @@ fn gpu_material(m: &scene::Material) -> GpuMaterial {
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),
         emissive_factor: m.emissive_factor.to_array(),
-        alpha_cutoff: m.alpha_mode.cutoff().unwrap_or(-1.0),
+        alpha_cutoff: match m.alpha_mode {
+            scene::AlphaMode::Blend => BLEND_VISIBLE_ALPHA,
+            mode => mode.cutoff().unwrap_or(-1.0),
+        },
         metallic: m.metallic_factor,
         roughness: m.roughness_factor,
         normal_scale: m.normal_scale,
         occlusion_strength: m.occlusion_strength,
         tex,
         uv_sets,
-        flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 },
+        flags: if m.double_sided { MATERIAL_DOUBLE_SIDED } else { 0 }
+            | if m.alpha_mode == scene::AlphaMode::Blend { MATERIAL_BLEND } else { 0 },
         transmission: m.transmission,
         ior: m.ior,
         thickness: m.thickness,

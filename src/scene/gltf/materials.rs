@@ -51,9 +51,7 @@ impl Builder<'_> {
 
     pub(super) fn materials(&mut self) -> Vec<Material> {
         let root = self.data.root;
-        let materials: Vec<Material> = root.materials.iter().enumerate().map(|(i, m)| self.material(i, m)).collect();
-        self.warn_blend(&materials);
-        materials
+        root.materials.iter().enumerate().map(|(i, m)| self.material(i, m)).collect()
     }
 
     pub(super) fn material(&mut self, i: usize, m: &json::Material) -> Material {
@@ -194,19 +192,6 @@ impl Builder<'_> {
                 self.ctx.warn(format!("materials[{i}].alphaMode: invalid value; using OPAQUE"));
                 AlphaMode::Opaque
             }
-        }
-    }
-
-    /// One warning per scene: the renderer has no sorted transparency.
-    pub(super) fn warn_blend(&mut self, materials: &[Material]) {
-        let mut blended = materials.iter().enumerate().filter(|(_, m)| m.alpha_mode == AlphaMode::Blend);
-        if let Some((first, m)) = blended.next() {
-            let count = 1 + blended.count();
-            self.ctx.warn(format!(
-                "{count} material(s) use alphaMode BLEND (first: materials[{first}] '{}'); \
-                 blending is drawn as alpha-masked at cutoff 0.5",
-                m.name
-            ));
         }
     }
 }

@@ -454,7 +454,6 @@ fn materials_textures_and_samplers() {
     assert_eq!(m.alpha_mode, AlphaMode::Mask { cutoff: 0.5 });
     assert!(m.double_sided);
     assert_eq!(scene.materials[1].alpha_mode, AlphaMode::Blend);
-    assert_warning(&scene, "2 material(s) use alphaMode BLEND");
     assert_eq!(scene.materials[3].base_color_texture, None);
     assert_warning(&scene, "materials[3].pbrMetallicRoughness.baseColorTexture.index: texture 42 out of range");
     assert_eq!(scene.materials[4].alpha_mode, AlphaMode::Mask { cutoff: 0.25 });
