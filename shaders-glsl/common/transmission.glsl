@@ -56,14 +56,25 @@ struct TransmissionSample {
     bool crossed;  // the path passed to the other side of the surface
 };
 
+// No direction: the drawn microfacet sent the light the wrong way (or v is below the surface).
+TransmissionSample transmission_none(vec3 v) {
+    TransmissionSample s;
+    s.l = -v;
+    s.weight = vec3(0.0);
+    s.crossed = false;
+    return s;
+}
+
+// What visible-normal sampling leaves of f cos / pdf besides Fresnel: G2(v, l) / G1(v).
+float vndf_shadowing(float n_dot_l, float n_dot_v, float alpha) {
+    return smith_visibility(n_dot_l, n_dot_v, alpha) * 4.0 * n_dot_v * n_dot_l / ggx_g1(n_dot_v, alpha);
+}
+
 // The transmitted lobe at an outside hit for view v at normal n (both on the ray's side):
 // thin-walled, straight through; else refracted into the volume. weight 0 when the drawn
 // microfacet sends the light the wrong way.
 TransmissionSample transmission_sample(BrdfInput m, bool thin_walled, float ior, vec3 n, vec3 v, vec2 u) {
-    TransmissionSample s;
-    s.l = -v;
-    s.weight = vec3(0.0);
-    s.crossed = true;
+    TransmissionSample s = transmission_none(v);
     float n_dot_v = dot(n, v);
     if (n_dot_v <= 0.0) return s;
     mat3 frame = orthonormal_basis(n);
@@ -84,20 +95,16 @@ TransmissionSample transmission_sample(BrdfInput m, bool thin_walled, float ior,
     }
     if (l_local.z >= 0.0 || f >= 1.0) return s;
     s.l = normalize(frame * l_local);
-    // Visible-normal sampling leaves (1 - F) G2(v, l) / G1(v) for either lobe.
-    float g1 = ggx_g1(n_dot_v, alpha);
-    float g2 = smith_visibility(-l_local.z, n_dot_v, alpha) * 4.0 * n_dot_v * (-l_local.z);
-    s.weight = (1.0 - f) * m.base_color * g2 / g1;
+    s.crossed = true;
+    // (1 - F) G2 / G1 for either lobe.
+    s.weight = (1.0 - f) * m.base_color * vndf_shadowing(-l_local.z, n_dot_v, alpha);
     return s;
 }
 
 // The bare interface seen from inside a volume: reflect with probability F (total internal
 // reflection included), else leave it. n faces the inside (the ray's side).
 TransmissionSample interface_sample(float roughness, float ior, vec3 n, vec3 v, vec3 u) {
-    TransmissionSample s;
-    s.l = -v;
-    s.weight = vec3(0.0);
-    s.crossed = false;
+    TransmissionSample s = transmission_none(v);
     float n_dot_v = dot(n, v);
     if (n_dot_v <= 0.0) return s;
     mat3 frame = orthonormal_basis(n);
@@ -116,9 +123,8 @@ TransmissionSample interface_sample(float roughness, float ior, vec3 n, vec3 v, 
         s.crossed = true;
     }
     s.l = normalize(frame * l_local);
-    float n_dot_l = abs(l_local.z);
     // F or 1 - F is the chance of the event taken: what remains is G2 / G1.
-    s.weight = vec3(smith_visibility(n_dot_l, n_dot_v, alpha) * 4.0 * n_dot_v * n_dot_l / ggx_g1(n_dot_v, alpha));
+    s.weight = vec3(vndf_shadowing(abs(l_local.z), n_dot_v, alpha));
     return s;
 }
 
