@@ -46,7 +46,7 @@ void main() {
 
     // Glass lets the share `transmission` of its diffuse light through instead (reflections
     // adds what comes through).
-    MaterialInfo mi = materials[instances[ids.x].material];
+    MaterialInfo mi = materials[ids.y];
     float transmission = mi.transmission;
     // A blended surface covers the share alpha of the pixel; reflections adds what shows
     // through the rest.

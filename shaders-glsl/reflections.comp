@@ -66,7 +66,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
     if (dot(weight, weight) <= 0.0) return vec3(0.0);
     vec3 origin = offset_ray_origin(p, -ng, depth);
     vec3 dir = ts.l;
-    vec3 absorption = thin ? vec3(0.0) : -log(max(mi.attenuation_color, vec3(1e-6))) / mi.attenuation_distance;
+    vec3 absorption = thin ? vec3(0.0) : volume_absorption(mi);
     vec3 emitted = vec3(0.0);  // by the glass surfaces passed on the way
     for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
@@ -86,7 +86,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
             next = transmission_sample(hm_brdf, hm.thickness <= 0.0, hm.ior, s.normal, -dir, rng_next2(rng));
             next.weight *= through;
             if (hm.thickness > 0.0) {
-                absorption = -log(max(hm.attenuation_color, vec3(1e-6))) / hm.attenuation_distance;
+                absorption = volume_absorption(hm);
             }
         }
         weight *= next.weight;
@@ -135,7 +135,7 @@ void main() {
 
     // Glass: what it lets through joins the specular signal (composite leaves its share out of
     // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
-    MaterialInfo mi = materials[instances[imageLoad(g_ids, px).x].material];
+    MaterialInfo mi = materials[imageLoad(g_ids, px).y];
     float transmitted = mi.transmission * (1.0 - m.metallic);
     vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng) : vec3(0.0);
     // A blended surface covers the share alpha of the pixel (composite scales its own light by

@@ -53,6 +53,12 @@ bool material_alpha_passes(uint material_id, vec2 uv0, vec2 uv1) {
     return cutoff < 0.0 || material_alpha(material_id, uv0, uv1) >= cutoff;
 }
 
+// Beer-Lambert coefficient per unit length inside a material's volume (KHR_materials_volume):
+// -ln(colour) / distance; a black colour absorbs everything within any finite length.
+vec3 volume_absorption(MaterialInfo m) {
+    return -log(max(m.attenuation_color, vec3(1e-6))) / m.attenuation_distance;
+}
+
 SurfaceMaterial read_material(uint material_id, vec2 uv0, vec2 uv1) {
     MaterialInfo m = materials[material_id];
     SurfaceMaterial s;
@@ -72,8 +78,7 @@ SurfaceMaterial read_material(uint material_id, vec2 uv0, vec2 uv1) {
     s.transmission = m.transmission;
     s.ior = m.ior;
     s.thin_walled = m.thickness <= 0.0;
-    // -ln(colour) / distance; a black colour absorbs everything within any finite length.
-    s.absorption = -log(max(m.attenuation_color, vec3(1e-6))) / m.attenuation_distance;
+    s.absorption = volume_absorption(m);
     return s;
 }
 

@@ -36,17 +36,13 @@ float transmitted_share(BrdfInput m, float transmission, vec3 n, vec3 v) {
 }
 
 // Schlick's Fresnel for light crossing an interface at microfacet cosine cos_i, with
-// eta = n_incident / n_transmitted; cos_t is the transmitted cosine. 1 under total internal
-// reflection. Schlick takes the angle on the optically thinner side, so the interface
-// reflects the same from both sides (and from outside it is glTF's F at v.h).
-float fresnel_interface(float f0, float cos_i, float eta, out float cos_t) {
+// eta = n_incident / n_transmitted; 1 under total internal reflection. Schlick takes the angle
+// on the optically thinner side, so the interface reflects the same from both sides (and from
+// outside it is glTF's F at v.h).
+float fresnel_interface(float f0, float cos_i, float eta) {
     float sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
-    if (sin2_t >= 1.0) {
-        cos_t = 0.0;
-        return 1.0;
-    }
-    cos_t = sqrt(1.0 - sin2_t);
-    float c = eta > 1.0 ? cos_t : cos_i;
+    if (sin2_t >= 1.0) return 1.0;
+    float c = eta > 1.0 ? sqrt(1.0 - sin2_t) : cos_i;
     return f0 + (1.0 - f0) * pow(1.0 - c, 5.0);
 }
 
@@ -89,8 +85,7 @@ TransmissionSample transmission_sample(BrdfInput m, bool thin_walled, float ior,
         l_local = vec3(r.xy, -r.z);
         f = fresnel_dielectric(m, v_dot_h);
     } else {
-        float cos_t;
-        f = fresnel_interface(m.dielectric_f0, v_dot_h, 1.0 / ior, cos_t);
+        f = fresnel_interface(m.dielectric_f0, v_dot_h, 1.0 / ior);
         l_local = refract(-v_local, h, 1.0 / ior);
     }
     if (l_local.z >= 0.0 || f >= 1.0) return s;
@@ -111,8 +106,7 @@ TransmissionSample interface_sample(float roughness, float ior, vec3 n, vec3 v, 
     vec3 v_local = vec3(dot(v, frame[0]), dot(v, frame[1]), n_dot_v);
     float alpha = ggx_alpha(roughness);
     vec3 h = sample_ggx_vndf(v_local, alpha, u.xy);
-    float cos_t;
-    float f = fresnel_interface(dielectric_f0(ior), dot(v_local, h), ior, cos_t);
+    float f = fresnel_interface(dielectric_f0(ior), dot(v_local, h), ior);
     vec3 l_local;
     if (u.z < f) {
         l_local = reflect(-v_local, h);
