@@ -129,6 +129,7 @@ pub static ALL: &[Tunable] = &[
         |s| s.gi.bounces,
         u32
     ),
+    tunable!("gi_half_rate", "GI", "trace half of the pixels a frame, fill the rest", bool, |s| s.gi.half_rate),
     tunable!("radiance_cache", "GI", "world-space cache of indirect light where rays end", bool, |s| s
         .radiance_cache
         .enabled),

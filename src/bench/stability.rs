@@ -412,8 +412,10 @@ pub fn moving_light(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     let mut r = renderer(rig, scene, denoised, start, 0)?;
     let width = rig.width as usize;
     let (first, lag) = step_response(&mut r, |_| {}, |i| i % width < width / 2)?;
+    // The raw frame shows the whole step at once; what it reads is its one-frame noise against
+    // the step (0.024 with gi at full rate, 0.080 at half rate: half the samples a frame).
     Ok(vec![
-        measure("first frame: step missing", "fraction", first, 0.08),
+        measure("first frame: step missing", "fraction", first, if denoised { 0.08 } else { 0.12 }),
         measure("lag (within 10% of the step)", "frames", lag, if denoised { 2.0 } else { 0.0 }),
     ])
 }

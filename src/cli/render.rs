@@ -12,6 +12,15 @@ use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
 
+/// `--gi-rate`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GiRate {
+    /// Every pixel every frame.
+    Full,
+    /// Half of the pixels each frame.
+    Half,
+}
+
 #[derive(Args)]
 pub struct RenderArgs {
     #[command(flatten)]
@@ -49,6 +58,10 @@ pub struct RenderArgs {
     /// off: the bounces traced).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
     gi_bounces: Option<u32>,
+    /// How many of the pixels gi traces each frame: `full`, or `half` (a checkerboard that
+    /// alternates every frame; the others are filled from their neighbours).
+    #[arg(long, value_enum, value_name = "RATE")]
+    gi_rate: Option<GiRate>,
     /// Turn the radiance cache off: gi and reflection rays trace a few bounces on instead of
     /// asking the cache where they end.
     #[arg(long)]
@@ -76,11 +89,11 @@ pub struct RenderArgs {
     shader_dir: Option<PathBuf>,
     /// Pick the most accurate configuration whose frame time is at most this many ms, from
     /// this scene's speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
-    #[arg(long, value_name = "MS", conflicts_with_all = ["target_error", "no_taa", "no_denoise", "gi_bounces"])]
+    #[arg(long, value_name = "MS", conflicts_with_all = ["target_error", "no_taa", "no_denoise", "gi_bounces", "gi_rate"])]
     target_ms: Option<f64>,
     /// Pick the fastest configuration whose HDR-FLIP error is at most this, from this scene's
     /// speed/accuracy sweep on this machine (`hybrid-rt bench sweep`).
-    #[arg(long, value_name = "FLIP", conflicts_with_all = ["no_taa", "no_denoise", "gi_bounces"])]
+    #[arg(long, value_name = "FLIP", conflicts_with_all = ["no_taa", "no_denoise", "gi_bounces", "gi_rate"])]
     target_error: Option<f64>,
 }
 
@@ -119,6 +132,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     };
     if let Some(b) = a.gi_bounces {
         settings.gi.bounces = b;
+    }
+    if let Some(rate) = a.gi_rate {
+        settings.gi.half_rate = rate == GiRate::Half;
     }
     settings.radiance_cache.enabled = !a.no_radiance_cache;
     if let Some(b) = a.cache_budget {

@@ -81,8 +81,11 @@ pub struct FullscreenPass {
     /// Storage buffers bound after the outputs, shared with other passes and kept across
     /// frames (the radiance cache's), with the GLSL names of their blocks.
     buffers: Vec<(&'static str, Arc<Buffer>)>,
-    /// Workgroups to dispatch; None: one invocation per pixel of the frame.
+    /// Workgroups to dispatch; None: one invocation per `pixels_per_invocation` of the frame.
     pub groups: Option<[u32; 3]>,
+    /// Pixels (across, down) one invocation covers when `groups` is None: [1, 1] but for a
+    /// shader that shades part of the frame (gi at half rate).
+    pub pixels_per_invocation: [u32; 2],
 }
 
 /// Compute-shader storage access, on both sides of the barrier before a pass that shares
@@ -142,6 +145,7 @@ impl FullscreenPass {
             clears: Vec::new(),
             buffers,
             groups: None,
+            pixels_per_invocation: [1, 1],
         })
     }
 }
@@ -226,7 +230,10 @@ impl Pass for FullscreenPass {
         }
         match self.groups {
             Some([x, y, z]) => rec.dispatch(x, y, z),
-            None => rec.dispatch_2d(ctx.extent, GROUP),
+            None => {
+                let [x, y] = self.pixels_per_invocation;
+                rec.dispatch_2d(ctx.extent, (GROUP.0 * x, GROUP.1 * y))
+            }
         }
         Ok(())
     }

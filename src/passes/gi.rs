@@ -31,6 +31,7 @@ pub struct Params {
     pub bounces: u32,
     pub seed: u32,
     pub roughness_cutoff: f32,
+    pub half_rate: u32,
 }
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -38,11 +39,15 @@ pub struct GiSettings {
     /// Path vertices traced after the primary surface before the radiance cache answers (1:
     /// the cache answers at the bounce ray's hit); with the cache off, the bounces traced.
     pub bounces: u32,
+    /// Trace half of the pixels each frame, on a checkerboard that alternates, and fill the
+    /// others from their traced neighbours (gi.comp). Not with resampled lights, whose
+    /// reservoirs every pixel carries.
+    pub half_rate: bool,
 }
 
 impl Default for GiSettings {
     fn default() -> Self {
-        Self { bounces: 1 }
+        Self { bounces: 1, half_rate: true }
     }
 }
 
@@ -73,8 +78,21 @@ pub fn new(
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), resampled_lights),
     ];
-    let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff };
-    FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)
+    let half_rate = s.half_rate && !resampled_lights;
+    if half_rate {
+        log::info!(
+            "gi: half of the pixels traced each frame (a checkerboard), the others filled from their neighbours"
+        );
+    } else if s.half_rate {
+        log::info!("gi: every pixel traced each frame: the resampled lights' reservoirs need every pixel");
+    }
+    let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff, half_rate: half_rate.into() };
+    let mut pass =
+        FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)?;
+    if half_rate {
+        pass.pixels_per_invocation = [2, 1];
+    }
+    Ok(pass)
 }
 
 /// The reservoirs' copy for the next frame.

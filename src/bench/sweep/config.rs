@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 /// One configuration of the hybrid frame. Its name lists the settings as letter + number,
 /// joined by `-`: `d` SVGF à-trous iterations (0 = denoiser off), `s` shadow rays per pixel
 /// and area light at most (s_max), `b` GI bounces, `r` reflection rays per pixel, `t0`
-/// when TAA is off, and `f1` when every pass runs instead of the scene's frame plan
+/// when TAA is off, `c0` when the radiance cache is off, `g2`/`g1` when gi traces half of the
+/// pixels each frame or all of them (against the default), and `f1` when every pass runs instead of the scene's frame plan
 /// (src/render/plan.rs): a pair differing only in `f` shows what the plan saves and costs. Settings left out of a name take the defaults (`d4-s5-b1-r1`, TAA on:
 /// the renderer's defaults, and what `hybrid-rt render` draws).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -24,6 +25,9 @@ pub struct Config {
     /// The radiance cache (sweeps cached before it existed had none).
     #[serde(default)]
     pub cache: bool,
+    /// gi traces half of the pixels per frame (`g2`) instead of all (`g1`).
+    #[serde(default)]
+    pub gi_half_rate: bool,
 }
 
 impl Default for Config {
@@ -37,6 +41,7 @@ impl Default for Config {
             taa: true,
             full: false,
             cache: s.radiance_cache.enabled,
+            gi_half_rate: s.gi.half_rate,
         }
     }
 }
@@ -53,6 +58,9 @@ impl std::fmt::Display for Config {
         }
         if !self.cache {
             write!(f, "-c0")?;
+        }
+        if self.gi_half_rate != Settings::default().gi.half_rate {
+            write!(f, "-g{}", if self.gi_half_rate { 2 } else { 1 })?;
         }
         if self.full {
             write!(f, "-f1")?;
@@ -89,6 +97,13 @@ impl std::str::FromStr for Config {
                     c.cache = n == 1;
                     continue;
                 }
+                "g" => {
+                    if !(1..=2).contains(&n) {
+                        bail!("configuration '{s}': g takes 1 (gi traces every pixel) or 2 (half of them a frame)");
+                    }
+                    c.gi_half_rate = n == 2;
+                    continue;
+                }
                 "f" => {
                     if n > 1 {
                         bail!("configuration '{s}': f takes 0 (frame plan) or 1 (every pass)");
@@ -98,7 +113,7 @@ impl std::str::FromStr for Config {
                 }
                 _ => bail!(
                     "configuration '{s}': unknown setting '{key}' (d: denoiser iterations, s: shadow s_max, \
-                     b: GI bounces, r: reflection rays, t: TAA 0/1, c: radiance cache 0/1, f: every pass 0/1)"
+                     b: GI bounces, r: reflection rays, t: TAA 0/1, c: radiance cache 0/1, g: gi rate 1/2, f: every pass 0/1)"
                 ),
             };
             if !range.contains(&n) {
@@ -123,13 +138,14 @@ impl Config {
         s.taa = self.taa;
         s.full = self.full;
         s.radiance_cache.enabled = self.cache;
+        s.gi.half_rate = self.gi_half_rate;
     }
 }
 
 /// The default configurations: each axis moved away from the renderer's defaults (d4-s5-b1-r1)
 /// on its own, once with the denoiser on and once with it off, plus the cheapest and the most
 /// expensive corners, and the frame without the radiance cache: with one bounce, and as a
-/// 1-spp path tracer. The first 15 took ~5 minutes at 320x180 on a 2-core lavapipe;
+/// 1-spp path tracer, and gi at full rate. The first 15 took ~5 minutes at 320x180 on a 2-core lavapipe;
 /// the full grid (5 x 3 x 2 x 2 x 2 = 120) would take hours and add few new front points.
 pub const DEFAULT_CONFIGS: &[&str] = &[
     "d0-s5-b1-r1-t0", // no temporal filtering at all: the raw one-sample frame
@@ -139,6 +155,7 @@ pub const DEFAULT_CONFIGS: &[&str] = &[
     "d2-s5-b1-r1",
     "d4-s5-b1-r1",    // the renderer's defaults
     "d4-s5-b1-r1-f1", // the same with every pass: what the frame plan saves and costs
+    "d4-s5-b1-r1-g1", // the same with gi tracing every pixel every frame
     "d4-s5-b1-r1-t0",
     "d4-s1-b1-r1",
     "d4-s8-b1-r1",
@@ -149,7 +166,7 @@ pub const DEFAULT_CONFIGS: &[&str] = &[
     "d4-s8-b2-r2",
     "d0-s5-b1-r1-c0", // without the radiance cache: one bounce
     "d4-s5-b1-r1-c0",
-    "d4-s5-b8-r1-c0", // a 1-spp path tracer (8 bounces, no cache) + SVGF + TAA
+    "d4-s5-b8-r1-c0-g1", // a 1-spp path tracer (8 bounces, no cache) + SVGF + TAA
 ];
 
 pub fn default_configs() -> Vec<Config> {
@@ -170,7 +187,11 @@ mod tests {
         assert_eq!("s8-t0".parse::<Config>().unwrap().to_string(), "d4-s8-b1-r1-t0");
         assert_eq!("b8-c0".parse::<Config>().unwrap().to_string(), "d4-s5-b8-r1-c0");
         assert!(!"c0".parse::<Config>().unwrap().cache && "c1".parse::<Config>().unwrap().cache);
-        for bad in ["x3", "d", "d-1", "s0", "d9", "t2", "c2", "", "d4s5"] {
+        // Half-rate gi is the default: only full rate shows in a name.
+        assert!(!"g1".parse::<Config>().unwrap().gi_half_rate && "g2".parse::<Config>().unwrap().gi_half_rate);
+        assert_eq!("g2".parse::<Config>().unwrap().to_string(), "d4-s5-b1-r1");
+        assert_eq!("c0-g1".parse::<Config>().unwrap().to_string(), "d4-s5-b1-r1-c0-g1");
+        for bad in ["x3", "d", "d-1", "s0", "d9", "t2", "c2", "g0", "g3", "", "d4s5"] {
             assert!(bad.parse::<Config>().is_err(), "{bad} should not parse");
         }
     }

@@ -142,6 +142,11 @@ pub struct Point {
     /// cells, as it does on a cut). Absent in sweeps cached before it was measured.
     #[serde(default)]
     pub cut_flip: Option<f64>,
+    /// HDR-FLIP of the run's first frame: no SVGF or TAA history and an empty radiance cache,
+    /// what a renderer started on this view shows. Absent in sweeps cached before it was
+    /// measured.
+    #[serde(default)]
+    pub first_flip: Option<f64>,
     /// PSNR (dB) after ACES + sRGB; absent when the images are identical (infinite).
     pub psnr_db: Option<f64>,
     /// SSIM after ACES + sRGB.
@@ -337,12 +342,15 @@ struct Run {
     stamps: Vec<f64>,
     per_pass: Vec<(String, Vec<f64>)>,
     last_frame: CpuImage,
+    /// With `cut`: the run's first frame (empty cache, no history).
+    first_frame: Option<CpuImage>,
     /// With `cut`: the frame after a camera cut that follows the run.
     after_cut: Option<CpuImage>,
 }
 
 /// Renders `opts.frames` frames of one configuration, timing the last `timed_frames`; with
-/// `cut`, then a camera cut and one frame more (untimed).
+/// `cut`, keeps the first frame too, then makes a camera cut and renders one frame more
+/// (untimed).
 #[allow(clippy::too_many_arguments)]
 fn run_config(
     ctx: &std::sync::Arc<Context>,
@@ -366,9 +374,13 @@ fn run_config(
     let mut totals = Vec::new();
     let mut stamps = Vec::new();
     let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut first_frame = None;
     for n in 0..opts.frames {
         r.render_frame()?;
         bar.inc(1);
+        if n == 0 && cut {
+            first_frame = Some(r.read_output(r.hdr_output())?);
+        }
         if n < opts.frames - opts.timed_frames {
             continue;
         }
@@ -389,12 +401,12 @@ fn run_config(
     } else {
         None
     };
-    Ok(Run { totals, stamps, per_pass, last_frame, after_cut })
+    Ok(Run { totals, stamps, per_pass, last_frame, first_frame, after_cut })
 }
 
 /// Measures one configuration's error (and first round's times) from its first run.
 fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Result<Point> {
-    let Run { totals, stamps, per_pass, last_frame: img, after_cut } = run;
+    let Run { totals, stamps, per_pass, last_frame: img, first_frame, after_cut } = run;
     let name = config.to_string();
     let flip =
         metrics::hdr_flip(reference, &img, &HdrFlipOptions::default()).with_context(|| format!("{name}: FLIP"))?;
@@ -402,6 +414,10 @@ fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Resu
         .map(|cut| metrics::hdr_flip(reference, &cut, &HdrFlipOptions::default()))
         .transpose()
         .with_context(|| format!("{name}: FLIP after the cut"))?;
+    let first_flip = first_frame
+        .map(|first| metrics::hdr_flip(reference, &first, &HdrFlipOptions::default()))
+        .transpose()
+        .with_context(|| format!("{name}: FLIP of the first frame"))?;
     let display = DisplayTransform::AcesSrgb { exposure: 0.0 };
     let psnr = metrics::psnr_display(reference, &img, display).with_context(|| format!("{name}: PSNR"))?;
     let ssim = metrics::ssim_with(reference, &img, display).with_context(|| format!("{name}: SSIM"))?;
@@ -414,6 +430,7 @@ fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Resu
         passes: per_pass.into_iter().map(|(pass, v)| PassMs { pass, ms: median(&v) }).collect(),
         flip: flip.mean,
         cut_flip: cut_flip.map(|f| f.mean),
+        first_flip: first_flip.map(|f| f.mean),
         psnr_db: psnr.is_finite().then_some(psnr),
         ssim,
         pareto: false,
@@ -538,6 +555,7 @@ pub(crate) mod testing {
                 passes: Vec::new(),
                 flip,
                 cut_flip: None,
+                first_flip: None,
                 psnr_db: Some(30.0),
                 ssim: 0.9,
                 pareto,

@@ -34,8 +34,8 @@ pub fn table(s: &SceneSweep) -> String {
         s.reference.made.noise_flip
     );
     t += &format!(
-        "  {:<18} {:>9} {:>9} {:>8} {:>9} {:>7} {:>14} {:>9}\n",
-        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM", "PT FLIP @time", "FLIP cut"
+        "  {:<18} {:>9} {:>9} {:>8} {:>9} {:>7} {:>14} {:>9} {:>10}\n",
+        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM", "PT FLIP @time", "FLIP cut", "FLIP first"
     );
     let mut order: Vec<&Point> = s.points.iter().collect();
     order.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
@@ -43,8 +43,9 @@ pub fn table(s: &SceneSweep) -> String {
         let psnr = p.psnr_db.map_or("inf".to_string(), |v| format!("{v:.2}"));
         let pt = path_tracer_flip_at(s, s.frames as f64 * p.frame_ms).map_or("-".to_string(), |f| format!("{f:.4}"));
         let cut = p.cut_flip.map_or("-".to_string(), |f| format!("{f:.4}"));
+        let first = p.first_flip.map_or("-".to_string(), |f| format!("{f:.4}"));
         t += &format!(
-            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4} {:>14} {:>9}\n",
+            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4} {:>14} {:>9} {:>10}\n",
             if p.pareto { "*" } else { " " },
             p.name,
             p.frame_ms,
@@ -53,14 +54,16 @@ pub fn table(s: &SceneSweep) -> String {
             psnr,
             p.ssim,
             pt,
-            cut
+            cut,
+            first
         );
     }
     if !s.path_tracer.is_empty() {
         t += &format!(
             "  PT FLIP @time: the path tracer's error after the time {} frames of the configuration took \
              (static camera; '-' beyond its curve)\n  FLIP cut: the frame after a camera cut at the end of \
-             the run (no SVGF or TAA history; the radiance cache keeps its cells)\n  path tracer \
+             the run (no SVGF or TAA history; the radiance cache keeps its cells)\n  FLIP first: the run's \
+             first frame (no history, an empty radiance cache)\n  path tracer \
              (progressive, same reference):\n",
             s.frames
         );
@@ -83,6 +86,14 @@ pub fn table(s: &SceneSweep) -> String {
                     cut,
                     cut / one.flip,
                     one.flip
+                );
+            }
+            if let (Some(first), 1) = (d.first_flip, one.spp) {
+                t += &format!(
+                    "  the very first frame of {} (empty cache too): FLIP {:.4}, {:.2}x the path tracer's at 1 spp\n",
+                    d.name,
+                    first,
+                    first / one.flip
                 );
             }
         }
@@ -119,13 +130,15 @@ mod tests {
     fn the_first_frame_after_a_cut_is_set_against_one_path_traced_sample() {
         let mut s = sweep(&[("d0-s5-b1-r1", 10.0, 0.3, true), ("d4-s5-b1-r1", 12.0, 0.1, true)]);
         s.points[1].cut_flip = Some(0.2);
+        s.points[1].first_flip = Some(0.25);
         let t = table(&s);
-        assert!(t.contains("FLIP cut"), "{t}");
+        assert!(t.contains("FLIP cut") && t.contains("FLIP first"), "{t}");
         let row = t.lines().find(|l| l.contains("d4-s5-b1-r1") && l.contains("0.1000")).expect("the default's row");
-        assert!(row.trim_end().ends_with("0.2000"), "{row}");
+        assert!(row.trim_end().ends_with("0.2000     0.2500"), "{row}");
         // A point measured without a cut shows none.
         let row = t.lines().find(|l| l.contains("d0-s5-b1-r1")).expect("the other row");
         assert!(row.trim_end().ends_with('-'), "{row}");
         assert!(t.contains("after a camera cut: FLIP 0.2000, 0.40x the path tracer's at 1 spp (0.5000)"), "{t}");
+        assert!(t.contains("(empty cache too): FLIP 0.2500, 0.50x the path tracer's at 1 spp"), "{t}");
     }
 }
