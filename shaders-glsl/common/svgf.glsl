@@ -1,4 +1,4 @@
-// Shared by the SVGF passes (svgf_guide, svgf_temporal, svgf_variance, svgf_atrous): settings,
+// Shared by the SVGF passes (svgf_guide, svgf_temporal, svgf_atrous): settings,
 // the reprojection validity test, the edge-stopping weights of Schied et al. 2017, and the
 // guide texel they read them from.
 #ifndef SVGF_GLSL
@@ -57,7 +57,7 @@ float svgf_depth_exponent(float z_p, float z_q, float inv_scale) { return abs(z_
 // below 1e-7 beyond 30 degrees, and this one needs no logarithm per tap.
 float svgf_normal_exponent(vec3 n_p, vec3 n_q) { return svgf.sigma_n * (1.0 - dot(n_p, n_q)); }
 
-// Frames of history from which the temporal moments give the variance (svgf_variance estimates
+// Frames of history from which the temporal moments give the variance (svgf_temporal estimates
 // it spatially before).
 #define SVGF_MOMENTS_FRAMES 4.0
 

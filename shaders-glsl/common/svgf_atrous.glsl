@@ -18,7 +18,7 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// Colour in rgb, its luminance variance in alpha (svgf_variance, or the previous iteration).
+// Colour in rgb, its luminance variance in alpha (svgf_temporal, or the previous iteration).
 #ifdef SVGF_PAIR
 #define SIGNALS 2
 layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_diffuse;

@@ -7,6 +7,13 @@
 // counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood, so
 // neither poisons the history.
 //
+// The colour's alpha is its luminance variance, what the a-trous iterations scale their
+// luminance weight by: from the temporal moments, or, while the history is shorter than
+// SVGF_MOMENTS_FRAMES, estimated over the same 7x7 neighbourhood of this frame's samples with
+// the edge-stopping weights (and boosted by 4 / history, as Falcor). Schied et al. estimate it
+// from the neighbours' accumulated moments in a pass of its own; one frame's samples are what
+// a young history holds (all of it at a disocclusion), and the window is loaded anyway.
+//
 // With SVGF_REFLECTION_MOTION defined (the specular chain behind the reflections pass) the
 // history of a narrow lobe is fetched where the reflected object was, not where the surface
 // was: the reflection of a point at hit distance d appears at the virtual point p + d view_dir
@@ -36,13 +43,15 @@ layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
 layout(set = 1, binding = 8, rgba32f) uniform readonly image2D prev_color;
 layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
 layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_history_length;
+// svgf_guide: shading normal and view depth (w < 0: no surface), for the spatial variance.
+layout(set = 1, binding = 11, rgba32f) uniform readonly image2D in_guide;
 #ifdef SVGF_REFLECTION_MOTION
 // reflections.hit_distance: mean distance to what the reflection rays hit (0: none traced).
-layout(set = 1, binding = 11, r32f) uniform readonly image2D in_hit_distance;
-layout(set = 1, binding = 12, rgba8) uniform readonly image2D g_metal_rough;
-#define SVGF_OUT 13  // outputs follow the inputs
+layout(set = 1, binding = 12, r32f) uniform readonly image2D in_hit_distance;
+layout(set = 1, binding = 13, rgba8) uniform readonly image2D g_metal_rough;
+#define SVGF_OUT 14  // outputs follow the inputs
 #else
-#define SVGF_OUT 11
+#define SVGF_OUT 12
 #endif
 layout(set = 1, binding = SVGF_OUT, rgba32f) uniform writeonly image2D out_color;
 layout(set = 1, binding = SVGF_OUT + 1, rg32f) uniform writeonly image2D out_moments;
@@ -60,18 +69,28 @@ bool load_finite(ivec2 q, out vec3 c) {
     return false;
 }
 
-// Scales `c` so its luminance is at most mean + k sigma of the 7x7 neighbourhood (surface
-// pixels only), which takes the energy out of fireflies before anything accumulates them.
-vec3 clamp_outlier(ivec2 px, vec3 c) {
+// What the 7x7 neighbourhood of this frame's samples says about pixel `px`.
+struct Neighbourhood {
+    float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
+    float variance;     // the spatial variance estimate (computed only when asked for)
+};
+
+// One pass over the 7x7 neighbourhood (surface pixels only) for the outlier clamp's bound,
+// mean + k sigma of the luminance, which takes the energy out of fireflies before anything
+// accumulates them; and, with `spatial`, the luminance variance around `l` (this pixel's
+// clamped luminance, which the luminance weight needs, so the clamp's bound is found first
+// and the window read twice only then).
+Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spatial) {
+    Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0);
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
-    if (isinf(svgf.clamp_sigma)) return c;
+    bool clamped = !isinf(svgf.clamp_sigma);
     float sum = 0.0, sum2 = 0.0, n = 0.0;
-    for (int dy = -3; dy <= 3; ++dy) {
+    for (int dy = -3; dy <= 3 && clamped; ++dy) {
         for (int dx = -3; dx <= 3; ++dx) {
             // The centre is left out, so a lone firefly cannot widen its own bound.
             if (dx == 0 && dy == 0) continue;
             ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
-            if (imageLoad(g_ids, q).x == NO_INSTANCE) continue;
+            if (!svgf_guide_surface(imageLoad(in_guide, q))) continue;
             vec3 s;
             load_finite(q, s);
             float l = luminance(s);
@@ -80,11 +99,34 @@ vec3 clamp_outlier(ivec2 px, vec3 c) {
             n += 1.0;
         }
     }
-    float mean = sum / max(n, 1.0);
-    float sigma = sqrt(max(0.0, sum2 / max(n, 1.0) - mean * mean));
-    float l = luminance(c);
-    float limit = mean + svgf.clamp_sigma * sigma;
-    return l > limit && l > 0.0 ? c * (limit / l) : c;
+    if (clamped) {
+        float mean = sum / max(n, 1.0);
+        nb.clamp_limit = mean + svgf.clamp_sigma * sqrt(max(0.0, sum2 / max(n, 1.0) - mean * mean));
+    }
+    if (!spatial) return nb;
+    float l = min(luminance(c), nb.clamp_limit);
+    vec2 m = vec2(0.0);
+    float wsum = 0.0;
+    for (int dy = -3; dy <= 3; ++dy) {
+        for (int dx = -3; dx <= 3; ++dx) {
+            ivec2 q = px + ivec2(dx, dy);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
+            vec4 gq = imageLoad(in_guide, q);
+            if (!svgf_guide_surface(gq)) continue;
+            vec3 s;
+            load_finite(q, s);
+            float lq = min(luminance(s), nb.clamp_limit);
+            float inv_z_scale = 1.0 / (svgf.sigma_z * fwidth_z * length(vec2(dx, dy)) + 1e-4);
+            // The luminance weight uses a fixed scale: there is no variance to scale it yet.
+            float w = exp(-svgf_depth_exponent(g.w, gq.w, inv_z_scale) - svgf_normal_exponent(g.xyz, gq.xyz) -
+                          abs(l - lq) / svgf.sigma_l);
+            m += w * vec2(lq, lq * lq);
+            wsum += w;
+        }
+    }
+    m /= max(wsum, 1e-6);
+    nb.variance = max(0.0, m.y - m.x * m.x);
+    return nb;
 }
 
 #ifdef SVGF_REFLECTION_MOTION
@@ -107,7 +149,6 @@ void main() {
     vec3 c;
     bool finite = load_finite(px, c);
     if (!finite) imageAtomicAdd(out_rejected, ivec2(0), 1u);
-    c = clamp_outlier(px, c);
 
     vec2 zf = imageLoad(g_depth, px).rg;
     float z = zf.x;
@@ -150,21 +191,27 @@ void main() {
         hist_len += w * imageLoad(prev_history_length, q).r;
         wsum += w;
     }
+    bool reprojected = wsum > 1e-3;
+    float len = reprojected ? min(hist_len / wsum + 1.0, cap) : 1.0;
+    Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), fw, c, len < SVGF_MOMENTS_FRAMES);
     float l = luminance(c);
+    if (l > nb.clamp_limit && l > 0.0) {
+        c *= nb.clamp_limit / l;
+        l = nb.clamp_limit;
+    }
     vec2 moments = vec2(l, l * l);
-    float len = 1.0;
-    if (wsum > 1e-3) {
+    if (reprojected) {
         hist_c /= wsum;
         hist_m /= wsum;
-        len = min(hist_len / wsum + 1.0, cap);
         float a = max(svgf.alpha, 1.0 / len);
         float am = max(svgf.moments_alpha, 1.0 / len);
         // A dropped (non-finite) sample leaves the history as it was.
         c = finite ? mix(hist_c, c, a) : hist_c;
         moments = finite ? mix(hist_m, moments, am) : hist_m;
     }
-    // The alpha is svgf_variance's to fill.
-    imageStore(out_color, px, vec4(c, 0.0));
+    float variance = len >= SVGF_MOMENTS_FRAMES ? max(0.0, moments.y - moments.x * moments.x)
+                                                : nb.variance * 4.0 / len;
+    imageStore(out_color, px, vec4(c, variance));
     imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
     imageStore(out_history_length, px, vec4(len));
 }

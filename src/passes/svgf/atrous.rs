@@ -4,7 +4,7 @@
 //! each tap's guide texel and depth and normal weights; any other signal on its own,
 //! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
-use super::{SvgfSettings, guide, iteration, temporal, variance};
+use super::{SvgfSettings, guide, iteration, temporal};
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
@@ -24,7 +24,7 @@ pub const SPECULAR: Output = Output::new(NAME, "specular");
 
 /// Iteration `i` of one signal.
 pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -> Result<FullscreenPass> {
-    let color = if i == 0 { variance::COLOR.of(super::signal(signal)) } else { COLOR.of(iteration(signal, i - 1)) };
+    let color = if i == 0 { temporal::COLOR.of(super::signal(signal)) } else { COLOR.of(iteration(signal, i - 1)) };
     let run = iteration(signal, i);
     let inputs = vec![
         Input::texel(color),
@@ -41,7 +41,7 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
 /// signal is made of reflection rays, whose narrow lobes keep their sharpness.
 pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> Result<FullscreenPass> {
     let (diffuse, specular) = if i == 0 {
-        (variance::COLOR.of(super::signal("diffuse")), variance::COLOR.of(super::signal("specular")))
+        (temporal::COLOR.of(super::signal("diffuse")), temporal::COLOR.of(super::signal("specular")))
     } else {
         (DIFFUSE.of(iteration(PAIR, i - 1)), SPECULAR.of(iteration(PAIR, i - 1)))
     };

@@ -1,7 +1,7 @@
 //! SVGF (Schied et al. 2017, with Falcor's defaults): spatiotemporal variance-guided filtering
 //! of demodulated signals, as a chain of passes. The frame's diffuse and specular signals:
 //!
-//! `svgf_temporal_<signal>` -> `svgf_variance_<signal>` (each signal) ->
+//! `svgf_temporal_<signal>` (each signal; its colour carries the variance in alpha) ->
 //! `svgf_atrous_diffuse_specular_0` ... `_<n-1>` (both at once)
 //!
 //! and a lone signal (the tests' injected one) the same with `svgf_atrous_<signal>_<i>`. Each
@@ -13,7 +13,6 @@
 pub mod atrous;
 pub mod guide;
 pub mod temporal;
-pub mod variance;
 
 use super::PassBuilder;
 use super::history::Kept;
@@ -110,7 +109,7 @@ pub struct Chain {
     pub kept: Vec<Kept>,
 }
 
-/// The temporal and variance stages of the chain of `signal` (`svgf_temporal_diffuse`):
+/// The temporal stage of the chain of `signal` (`svgf_temporal_diffuse`):
 /// `temporal::COLOR.of(svgf::signal("diffuse"))`.
 pub const fn signal(signal: &'static str) -> Instance {
     Instance { signal: Some(signal), iteration: None }
@@ -142,7 +141,6 @@ pub fn pair(
     let mut kept = Vec::new();
     for (name, input, filtered, hit_distance) in signals {
         passes.push(Box::new(temporal::new(b, name, input, filtered, hit_distance, s)?));
-        passes.push(Box::new(variance::new(b, name, s)?));
         kept.extend(keep(name, filtered));
     }
     for i in 0..iterations {
@@ -156,8 +154,7 @@ pub fn pair(
 pub fn single(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSettings) -> Result<Chain> {
     let iterations = s.iterations.max(1);
     let filtered = atrous::COLOR.of(iteration(signal, 0));
-    let mut passes: Vec<Box<dyn Pass>> =
-        vec![Box::new(temporal::new(b, signal, input, filtered, None, s)?), Box::new(variance::new(b, signal, s)?)];
+    let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(temporal::new(b, signal, input, filtered, None, s)?)];
     for i in 0..iterations {
         passes.push(Box::new(atrous::single(b, signal, i, s)?));
     }

@@ -1,9 +1,10 @@
 //! svgf_temporal_<signal>: reprojected temporal accumulation of colour and luminance moments
-//! with a history length (shaders-glsl/svgf_temporal.comp). The specular chain behind the
+//! with a history length, and the colour's luminance variance (from the moments, or a 7x7
+//! spatial estimate while the history is young) in its alpha (shaders-glsl/svgf_temporal.comp). The specular chain behind the
 //! reflections pass reprojects a narrow lobe's history from the reflected object's virtual
 //! position instead (svgf_temporal_specular.comp, common/svgf_temporal.glsl).
 
-use super::{SvgfSettings, signal};
+use super::{SvgfSettings, guide, signal};
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview, Resource};
 use crate::passes::PassBuilder;
@@ -13,7 +14,8 @@ use crate::passes::history;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_temporal";
-/// The accumulated colour (of one chain: `COLOR.of(svgf::signal(signal))`).
+/// The accumulated colour in rgb, its luminance variance in alpha: each a-trous tap loads one
+/// texel for both (of one chain: `COLOR.of(svgf::signal(signal))`).
 pub const COLOR: Output = Output::new(NAME, "color");
 /// First and second moments of the luminance.
 pub const MOMENTS: Output = Output::new(NAME, "moments");
@@ -48,6 +50,7 @@ pub fn new(
         Input::texel(history::of(filtered)).bound_as("prev_color"),
         Input::texel(history::of(MOMENTS.of(run))),
         Input::texel(history::of(HISTORY_LENGTH.of(run))),
+        Input::texel(guide::GUIDE),
     ];
     let mut shader = "svgf_temporal.comp".to_string();
     if let Some(hit_distance) = hit_distance {
