@@ -157,7 +157,9 @@ struct SweepArgs {
     #[arg(long, default_value_t = 256)]
     reference_bounces: u32,
     /// The path tracer's curve on the same axes: 1, 2, 4, ... up to this many samples per
-    /// pixel, each timed and compared with the reference like the configurations (0: none).
+    /// pixel, each timed and compared with the reference like the configurations, and on to the
+    /// power of two that takes as long as the slowest configuration's frames (up to 1024), so
+    /// that each configuration has the path tracer's error at equal time (0: no curve).
     #[arg(long, default_value_t = 64)]
     pt_spp: u32,
     /// Render the reference again even when it is cached (and replace the cached one).

@@ -295,7 +295,10 @@ fn reference(
 }
 
 /// The path tracer's curve: one progressive run of `opts.path_tracer_spp` samples, its error
-/// measured at each power of two against `reference`.
+/// measured at each power of two against `reference`, and on past them to the power of two
+/// whose time covers `cover_ms` (the slowest configuration's frames, so that each has the path
+/// tracer's error at equal time on the curve; at most MAX_PATH_TRACER_SPP).
+#[allow(clippy::too_many_arguments)]
 fn path_tracer_curve(
     ctx: &std::sync::Arc<Context>,
     shaders: &ShaderLibrary,
@@ -303,6 +306,7 @@ fn path_tracer_curve(
     backend: Backend,
     opts: &Options,
     reference: &CpuImage,
+    cover_ms: f64,
 ) -> Result<Vec<PathTracerPoint>> {
     if opts.path_tracer_spp == 0 {
         return Ok(Vec::new());
@@ -317,17 +321,28 @@ fn path_tracer_curve(
     let mut r = Renderer::new(ctx, shaders, scene.clone(), settings, &opts.camera, backend)?;
     let bar = crate::progress::progress_bar(opts.path_tracer_spp as u64, "path tracer spp");
     let (mut sample_ms, mut measured) = (Vec::new(), Vec::new());
-    for spp in 1..=opts.path_tracer_spp {
+    let mut last = opts.path_tracer_spp;
+    let mut spp = 0;
+    while spp < last {
+        spp += 1;
         r.render_frame()?;
         bar.inc(1);
         if spp > 1 {
             sample_ms.push(r.last_frame_wall_ms);
         }
-        if spp.is_power_of_two() || spp == opts.path_tracer_spp {
+        if spp.is_power_of_two() || spp == last {
             let img = r.read_output(pathtrace::COLOR)?;
             let flip = metrics::hdr_flip(reference, &img, &HdrFlipOptions::default())
                 .with_context(|| format!("path tracer at {spp} spp: FLIP"))?;
             measured.push((spp, flip.mean));
+        }
+        if spp == last && !sample_ms.is_empty() {
+            // Short of the slowest configuration's time: on to the next power of two.
+            let covered = spp as f64 * median(&sample_ms);
+            if covered < cover_ms && spp < MAX_PATH_TRACER_SPP {
+                last = (spp + 1).next_power_of_two().min(MAX_PATH_TRACER_SPP);
+                bar.set_length(last as u64);
+            }
         }
     }
     bar.finish_and_clear();
@@ -335,6 +350,9 @@ fn path_tracer_curve(
     let per_sample = if sample_ms.is_empty() { r.last_frame_wall_ms } else { median(&sample_ms) };
     Ok(measured.into_iter().map(|(spp, flip)| PathTracerPoint { spp, ms: spp as f64 * per_sample, flip }).collect())
 }
+
+/// The most samples the path tracer's curve goes on to, covering a slow configuration.
+const MAX_PATH_TRACER_SPP: u32 = 1024;
 
 /// What one run of a configuration timed, and its last frame.
 struct Run {
@@ -482,7 +500,8 @@ pub fn sweep_scene(
         }
     }
     bar.finish_and_clear();
-    let path_tracer = path_tracer_curve(ctx, shaders, scene, backend, opts, &reference)?;
+    let slowest = points.iter().map(|p| p.frame_ms * opts.frames as f64).fold(0.0, f64::max);
+    let path_tracer = path_tracer_curve(ctx, shaders, scene, backend, opts, &reference, slowest)?;
     for p in &path_tracer {
         log::info!("path tracer {} spp: {:.2} ms, FLIP {:.4}", p.spp, p.ms, p.flip);
     }
