@@ -211,17 +211,17 @@ Estimate shade(ivec2 px) {
 // the surface (instance, shading normal, view depth; depth < 0: nothing traced) for the
 // fill's test.
 shared vec3 s_diffuse[8][8];
-shared uint s_instance[8][8];
 shared vec3 s_specular[8][8];
-shared vec4 s_surface[8][8];
 shared bool s_rough[8][8];
+shared uint s_instance[8][8];
+shared vec4 s_surface[8][8];
 
 // Fills pixel `px` (the untraced one of invocation `l`'s pair) with the mean of its traced
 // neighbours (left, right, above, below) that show the same surface: the same instance (two
 // floors either side of a wall seen edge-on meet on screen at one depth and normal), shading
 // normals within 25 degrees, and each point within 1% of the depth of the other's tangent
-// plane. False where
-// none does, or where the pixel needs no fill decided here (no surface or no lobe to gather).
+// plane. False where none does, or where the pixel needs no fill (no surface, or no lobe to
+// gather: shade() writes its zeros).
 bool fill_from_neighbours(ivec2 px, ivec2 l, uint parity) {
     uint id = imageLoad(g_ids, px).x;
     vec4 mr = imageLoad(g_metal_rough, px);
