@@ -6,11 +6,11 @@
 
 mod common;
 
-use glam::{Quat, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::passes::pathtrace;
 use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
-use hybrid_rt::scene::{AlphaMode, Camera, Instance, Material, Node, Scene, builtin};
+use hybrid_rt::scene::{AlphaMode, Camera, Instance, Material, Scene, builtin};
 use std::sync::Arc;
 
 const SIZE: u32 = 16;
@@ -27,15 +27,8 @@ fn quad_scene(alpha: f32, mode: AlphaMode) -> Scene {
         ..Default::default()
     });
     s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X * 4.0, Vec3::Y * 4.0, 0));
-    let node = |name: &str, t: Vec3| Node {
-        name: name.into(),
-        parent: None,
-        translation: t,
-        rotation: Quat::IDENTITY,
-        scale: Vec3::ONE,
-    };
-    s.nodes.push(node("quad", Vec3::ZERO));
-    s.nodes.push(node("camera", Vec3::new(0.0, 0.0, 3.0)));
+    s.nodes.push(common::node("quad", Vec3::ZERO));
+    s.nodes.push(common::node("camera", Vec3::new(0.0, 0.0, 3.0)));
     s.instances.push(Instance { mesh: 0, node: 0 });
     s.cameras.push(Camera {
         name: "front".into(),

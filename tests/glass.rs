@@ -13,11 +13,11 @@
 
 mod common;
 
-use glam::{DVec3, Quat, Vec3};
+use glam::{DVec3, Vec3};
 use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::passes::pathtrace;
 use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
-use hybrid_rt::scene::{Camera, Instance, Material, Node, Scene, builtin, load_gltf};
+use hybrid_rt::scene::{Camera, Instance, Material, Scene, builtin, load_gltf};
 use std::sync::Arc;
 
 fn glass(roughness: f32, thickness: f32) -> Material {
@@ -31,17 +31,13 @@ fn glass(roughness: f32, thickness: f32) -> Material {
     }
 }
 
-fn node(name: &str, t: Vec3) -> Node {
-    Node { name: name.into(), parent: None, translation: t, rotation: Quat::IDENTITY, scale: Vec3::ONE }
-}
-
 /// `mesh` at the origin, seen from (0, 0, distance) down -Z through `yfov`.
 fn scene(material: Material, mesh: hybrid_rt::scene::Mesh, distance: f32, yfov: f32) -> Scene {
     let mut s = Scene { name: "glass".into(), ..Default::default() };
     s.materials.push(material);
     s.meshes.push(mesh);
-    s.nodes.push(node("glass", Vec3::ZERO));
-    s.nodes.push(node("camera", Vec3::new(0.0, 0.0, distance)));
+    s.nodes.push(common::node("glass", Vec3::ZERO));
+    s.nodes.push(common::node("camera", Vec3::new(0.0, 0.0, distance)));
     s.instances.push(Instance { mesh: 0, node: 0 });
     s.cameras.push(Camera { name: "front".into(), yfov, aspect_ratio: None, znear: 0.01, zfar: Some(100.0), node: 1 });
     s

@@ -67,6 +67,17 @@ pub fn auto_backend(ctx: &Context) -> hybrid_rt::backend::Backend {
     hybrid_rt::backend::resolve(&ctx.caps, hybrid_rt::backend::BackendChoice::Auto).expect("auto backend").0
 }
 
+/// A root node at `translation`, unrotated and unscaled (test scenes built in code).
+pub fn node(name: &str, translation: glam::Vec3) -> hybrid_rt::scene::Node {
+    hybrid_rt::scene::Node {
+        name: name.into(),
+        parent: None,
+        translation,
+        rotation: glam::Quat::IDENTITY,
+        scale: glam::Vec3::ONE,
+    }
+}
+
 /// True when all 8 neighbours see the same instance in the G-buffer (not a silhouette).
 pub fn interior(ids: &CpuImage, x: u32, y: u32) -> bool {
     if x == 0 || y == 0 || x + 1 >= ids.width || y + 1 >= ids.height {
