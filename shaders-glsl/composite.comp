@@ -25,8 +25,10 @@ layout(set = 1, binding = 3, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_emissive;
 layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 6, rgba16f) uniform readonly image2D in_visibility;
-layout(set = 1, binding = 7, rgba32f) uniform readonly image2D in_diffuse;
-layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_specular;
+// The diffuse and specular signals, raw (rgba32f) or denoised (rgba16f): sampled, which reads
+// either format.
+layout(set = 1, binding = 7) uniform sampler2D in_diffuse;
+layout(set = 1, binding = 8) uniform sampler2D in_specular;
 layout(set = 1, binding = 9, rgba32f) uniform writeonly image2D out_color;
 
 void main() {
@@ -59,7 +61,7 @@ void main() {
         radiance += reflection_eval_cos(m, transmission, n, v, ls.dir) * ls.radiance * vis[i];
     }
     // The diffuse signal is the lobe without its albedo (gi.comp).
-    radiance += (1.0 - transmission) * brdf_diffuse_albedo(m) * imageLoad(in_diffuse, px).rgb;
-    radiance = cover * radiance + imageLoad(in_specular, px).rgb;
+    radiance += (1.0 - transmission) * brdf_diffuse_albedo(m) * texelFetch(in_diffuse, px, 0).rgb;
+    radiance = cover * radiance + texelFetch(in_specular, px, 0).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

@@ -5,7 +5,8 @@
 //! - NaN/Inf never enter the history (and are counted), fireflies are clamped;
 //! - history restarts on disocclusion and on a camera cut;
 //! - converged pixels skip the a-trous iterations after the first;
-//! - noise falls with accumulated frames, by stated factors.
+//! - noise falls with accumulated frames, by stated factors;
+//! - the half-precision history keeps the mean of a noisy signal.
 
 mod common;
 
@@ -75,16 +76,20 @@ fn atrous_impulse_response_is_the_b3_kernel_and_keeps_energy() {
         }
     }
     // Two iterations (steps 1 and 2) spread the impulse over 13x13 pixels, all inside the image
-    // and on the plane: every weight is the kernel's, so the energy is kept exactly and the
-    // response is symmetric.
+    // and on the plane: every weight is the kernel's, so the energy is kept but for rounding
+    // and the response is symmetric. The rounding is half precision's (the filtered signals'
+    // storage, at most 2^-12 of each texel, twice): 0.025% measured, 0.05% allowed.
     let img = &imgs[1];
     let total: f64 = (0..H).flat_map(|y| (0..W).map(move |x| (x, y))).map(|(x, y)| img.get(x, y, 0) as f64).sum();
-    assert!((total - 100.0).abs() < 1e-3, "energy after 2 iterations: {total}");
+    assert!((total - 100.0).abs() < 0.05, "energy after 2 iterations: {total}");
+    // Symmetric to one step of half precision (2^-10 of the value): the sums are added in
+    // different orders along the two axes, and round to neighbouring halves.
     for d in 1..=6u32 {
         let (l, r, u, b) =
             (img.get(cx - d, cy, 0), img.get(cx + d, cy, 0), img.get(cx, cy - d, 0), img.get(cx, cy + d, 0));
+        let step = l.abs() * 2f32.powi(-10) + 1e-7;
         assert!(
-            (l - r).abs() < 1e-5 && (u - b).abs() < 1e-5 && (l - u).abs() < 1e-5,
+            (l - r).abs() <= step && (u - b).abs() <= step && (l - u).abs() <= step,
             "asymmetric at {d}: {l} {r} {u} {b}"
         );
     }
@@ -226,5 +231,46 @@ fn converged_pixels_skip_the_later_iterations() {
             assert!(change > 0.05, "with converged 0 the later iterations should blur the pattern: {change}");
         }
     }
+    common::assert_validation_clean(ctx);
+}
+
+/// The history is stored at half precision, and accumulating noise must not bias it: a store
+/// that truncates (as Vulkan allows, and lavapipe does) loses about 2^-12 of the value each
+/// frame, and the history, blending in 1/32 of each new frame, settles that many times lower
+/// (0.7% darker on the default scene before `svgf_nearest_half`). Noise of mean 1 for 64
+/// frames, with no edge-stopping by luminance and no clamp, so that the filter itself cannot
+/// move the mean: the history's mean over the plane stays at 1 to within what the noise allows.
+/// Measured: 0.9988 with the rounding, 0.9878 with the stores truncating; bound 0.4%.
+#[test]
+fn half_precision_history_keeps_the_mean_of_a_noisy_signal() {
+    let ctx = common::validated_context();
+    let mut r = renderer_with(&ctx, no_luminance_stopping(), 0.0);
+    let mut state = 0x2545_f491u32;
+    let mut uniform = move || {
+        // xorshift32: noise independent from pixel to pixel and frame to frame.
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32
+    };
+    for _ in 0..64 {
+        let texels = (0..W * H)
+            .map(|_| {
+                let v = 0.5 + uniform();
+                [v, v, v, 1.0]
+            })
+            .collect();
+        r.inject(INPUT, texels).unwrap();
+        r.render_frame().unwrap();
+    }
+    let imgs = r.read_outputs(&[atrous(0), passes::gbuffer::IDS]).unwrap();
+    let plane: Vec<f64> = (0..W * H)
+        .filter(|i| imgs[1].get_u32(i % W, i / W, 0) == facts::PLANE_INSTANCE)
+        .map(|i| imgs[0].get(i % W, i / W, 0) as f64)
+        .collect();
+    let mean = plane.iter().sum::<f64>() / plane.len() as f64;
+    eprintln!("history mean over {} plane pixels after 64 frames of noise of mean 1: {mean:.5}", plane.len());
+    assert!((mean - 1.0).abs() < 0.004, "the history's mean drifted: {mean}");
+    drop(r);
     common::assert_validation_clean(ctx);
 }

@@ -2,7 +2,7 @@
 // SVGF_PAIR): one iteration of the edge-avoiding a-trous wavelet filter, a 5x5 B3-spline kernel
 // with holes (step 2^i), weighted by depth (scaled by the surface's depth slope), shading normal
 // (sigma_n; see svgf_normal_exponent) and luminance (scaled by the 3x3-prefiltered standard
-// deviation). Colour is filtered with the weights, variance (the colour's alpha) with their
+// deviation). Colour is filtered with the weights, variance (from the colour's alpha) with their
 // squares, so the next iteration stops at the right edges.
 //
 // The pair filters diffuse and specular in one dispatch: each tap's guide texel (depth, normal,
@@ -15,47 +15,48 @@
 #extension GL_EXT_control_flow_attributes : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
+#include "common/svgf.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// Colour in rgb, its luminance variance in alpha (svgf_temporal, or the previous iteration).
+// Colour in rgb, the standard deviation of its luminance in alpha (svgf_temporal, or the
+// previous iteration; svgf_pack). load_signal and store_signal work with the variance.
 #ifdef SVGF_PAIR
 #define SIGNALS 2
-layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_diffuse;
-layout(set = 1, binding = 1, rgba32f) uniform readonly image2D in_specular;
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_diffuse;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_specular;
 layout(set = 1, binding = 2, r32f) uniform readonly image2D in_diffuse_history_length;
 layout(set = 1, binding = 3, r32f) uniform readonly image2D in_specular_history_length;
 layout(set = 1, binding = 4, rgba32f) uniform readonly image2D in_guide;
 layout(set = 1, binding = 5, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 layout(set = 1, binding = 6, rgba8) uniform readonly image2D g_metal_rough;
-layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 8, rgba32f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 7, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D out_specular;
 
-vec4 load_signal(int s, ivec2 q) { return s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q); }
+vec4 load_signal(int s, ivec2 q) { return svgf_unpack(s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)); }
 
 float load_history_length(int s, ivec2 q) {
     return (s == 0 ? imageLoad(in_diffuse_history_length, q) : imageLoad(in_specular_history_length, q)).r;
 }
 
 void store_signal(int s, ivec2 q, vec4 v) {
-    if (s == 0) imageStore(out_diffuse, q, v);
-    else imageStore(out_specular, q, v);
+    if (s == 0) imageStore(out_diffuse, q, svgf_pack(v.rgb, v.a));
+    else imageStore(out_specular, q, svgf_pack(v.rgb, v.a));
 }
 #else
 #define SIGNALS 1
-layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_color;
+layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, r32f) uniform readonly image2D in_history_length;
 layout(set = 1, binding = 2, rgba32f) uniform readonly image2D in_guide;
 layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 4, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 4, rgba16f) uniform writeonly image2D out_color;
 
-vec4 load_signal(int s, ivec2 q) { return imageLoad(in_color, q); }
+vec4 load_signal(int s, ivec2 q) { return svgf_unpack(imageLoad(in_color, q)); }
 float load_history_length(int s, ivec2 q) { return imageLoad(in_history_length, q).r; }
 
-void store_signal(int s, ivec2 q, vec4 v) { imageStore(out_color, q, v); }
+void store_signal(int s, ivec2 q, vec4 v) { imageStore(out_color, q, svgf_pack(v.rgb, v.a)); }
 #endif
 
-#include "common/svgf.glsl"
 
 const float B3[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 

@@ -7,8 +7,8 @@
 // counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood, so
 // neither poisons the history.
 //
-// The colour's alpha is its luminance variance, what the a-trous iterations scale their
-// luminance weight by: from the temporal moments, or, while the history is shorter than
+// The colour's alpha holds its luminance variance (as the deviation, svgf_pack), what the
+// a-trous iterations scale their luminance weight by: from the temporal moments, or, while the history is shorter than
 // SVGF_MOMENTS_FRAMES, estimated over the same 7x7 neighbourhood of this frame's samples with
 // the edge-stopping weights (and boosted by 4 / history, as Falcor). Schied et al. estimate it
 // from the neighbours' accumulated moments in a pass of its own; one frame's samples are what
@@ -40,7 +40,7 @@ layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_motion;
 layout(set = 1, binding = 5, rg32f) uniform readonly image2D prev_depth;
 layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal_geo;
 layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
-layout(set = 1, binding = 8, rgba32f) uniform readonly image2D prev_color;
+layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_color;
 layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
 layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_history_length;
 // svgf_guide: shading normal and view depth (w < 0: no surface), for the spatial variance.
@@ -53,7 +53,7 @@ layout(set = 1, binding = 13, rgba8) uniform readonly image2D g_metal_rough;
 #else
 #define SVGF_OUT 12
 #endif
-layout(set = 1, binding = SVGF_OUT, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = SVGF_OUT, rgba16f) uniform writeonly image2D out_color;
 layout(set = 1, binding = SVGF_OUT + 1, rg32f) uniform writeonly image2D out_moments;
 layout(set = 1, binding = SVGF_OUT + 2, r32f) uniform writeonly image2D out_history_length;
 // x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
@@ -211,7 +211,7 @@ void main() {
     }
     float variance = len >= SVGF_MOMENTS_FRAMES ? max(0.0, moments.y - moments.x * moments.x)
                                                 : nb.variance * 4.0 / len;
-    imageStore(out_color, px, vec4(c, variance));
+    imageStore(out_color, px, svgf_pack(c, variance));
     imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
     imageStore(out_history_length, px, vec4(len));
 }

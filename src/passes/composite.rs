@@ -22,8 +22,9 @@ pub fn new(b: &PassBuilder, visibility: Resource, diffuse: Resource, specular: R
             .to_vec();
     inputs.extend([
         Input::texel(visibility).bound_as("in_visibility"),
-        Input::texel(diffuse).bound_as("in_diffuse"),
-        Input::texel(specular).bound_as("in_specular"),
+        // Sampled (texelFetch): denoised, they are half precision; raw, full.
+        Input::filtered(diffuse).bound_as("in_diffuse"),
+        Input::filtered(specular).bound_as("in_specular"),
     ]);
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
     FullscreenPass::new(b, NAME, "composite.comp", inputs, outputs, &())

@@ -14,7 +14,8 @@ use std::sync::Arc;
 pub enum Read {
     /// imageLoad of exact texels.
     Texel,
-    /// texture() with a bilinear, clamped sampler (reprojection).
+    /// texture() with a bilinear, clamped sampler (reprojection); or texelFetch, for an input
+    /// whose float format varies (a sampled image's binding names none).
     Filtered,
 }
 

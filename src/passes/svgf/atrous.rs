@@ -4,8 +4,7 @@
 //! each tap's guide texel and depth and normal weights; any other signal on its own,
 //! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
-use super::{SvgfSettings, guide, iteration, temporal};
-use crate::gpu::vk;
+use super::{COLOR_FORMAT, SvgfSettings, guide, iteration, temporal};
 use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
@@ -15,11 +14,11 @@ use anyhow::Result;
 pub const NAME: &str = "svgf_atrous";
 /// The run name of the pair's iterations (`svgf_atrous_diffuse_specular_0`).
 pub const PAIR: &str = "diffuse_specular";
-/// A lone signal's filtered colour, variance in alpha (`COLOR.of(svgf::iteration(signal, i))`).
+/// A lone signal's filtered colour, its luminance's standard deviation in alpha (`COLOR.of(svgf::iteration(signal, i))`).
 pub const COLOR: Output = Output::new(NAME, "color");
-/// The pair's filtered diffuse signal, variance in alpha (`DIFFUSE.of(svgf::iteration(PAIR, i))`).
+/// The pair's filtered diffuse signal, its luminance's standard deviation in alpha (`DIFFUSE.of(svgf::iteration(PAIR, i))`).
 pub const DIFFUSE: Output = Output::new(NAME, "diffuse");
-/// The pair's filtered specular signal, variance in alpha.
+/// The pair's filtered specular signal, its luminance's standard deviation in alpha.
 pub const SPECULAR: Output = Output::new(NAME, "specular");
 
 /// Iteration `i` of one signal.
@@ -32,7 +31,7 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
         Input::texel(guide::GUIDE),
         Input::texel(gbuffer::DEPTH),
     ];
-    let outputs = vec![OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    let outputs = vec![OutputDesc::storage(COLOR.of(run), COLOR_FORMAT, Preview::Color)];
     let push = s.push_constants(1 << i, 0);
     FullscreenPass::new(b, &COLOR.of(run).pass_name(), "svgf_atrous.comp", inputs, outputs, &push)
 }
@@ -56,8 +55,8 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
     ];
     let run = iteration(PAIR, i);
     let outputs = vec![
-        OutputDesc::storage(DIFFUSE.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        OutputDesc::storage(SPECULAR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(DIFFUSE.of(run), COLOR_FORMAT, Preview::Color),
+        OutputDesc::storage(SPECULAR.of(run), COLOR_FORMAT, Preview::Color),
     ];
     let flags = if sharp_specular { SHARP_SPECULAR } else { 0 };
     let push = s.push_constants(1 << i, flags);

@@ -1,7 +1,7 @@
 //! SVGF (Schied et al. 2017, with Falcor's defaults): spatiotemporal variance-guided filtering
 //! of demodulated signals, as a chain of passes. The frame's diffuse and specular signals:
 //!
-//! `svgf_temporal_<signal>` (each signal; its colour carries the variance in alpha) ->
+//! `svgf_temporal_<signal>` (each signal; its colour carries the luminance's deviation in alpha) ->
 //! `svgf_atrous_diffuse_specular_0` ... `_<n-1>` (both at once)
 //!
 //! and a lone signal (the tests' injected one) the same with `svgf_atrous_<signal>_<i>`. Each
@@ -20,6 +20,11 @@ use crate::gpu::vk;
 use crate::graph::{Instance, Output, Pass, Preview, Resource};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
+
+/// The format of a filtered signal (svgf_temporal's colour and every a-trous iteration's): half
+/// precision, the standard deviation of the luminance in alpha (`svgf_pack` in
+/// common/svgf.glsl says why).
+pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 /// The default of `SvgfSettings::converged`.
 const CONVERGED: f32 = 0.05;
@@ -167,7 +172,7 @@ pub fn single(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSe
 fn keep(signal: &'static str, filtered: Output) -> [Kept; 3] {
     let run = self::signal(signal);
     [
-        Kept::new(filtered, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        Kept::new(filtered, COLOR_FORMAT, Preview::Color),
         Kept::new(temporal::MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
         Kept::new(temporal::HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
     ]

@@ -4,7 +4,7 @@
 //! reflections pass reprojects a narrow lobe's history from the reflected object's virtual
 //! position instead (svgf_temporal_specular.comp, common/svgf_temporal.glsl).
 
-use super::{SvgfSettings, guide, signal};
+use super::{COLOR_FORMAT, SvgfSettings, guide, signal};
 use crate::gpu::vk;
 use crate::graph::{Output, OutputDesc, Preview, Resource};
 use crate::passes::PassBuilder;
@@ -14,8 +14,8 @@ use crate::passes::history;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_temporal";
-/// The accumulated colour in rgb, its luminance variance in alpha: each a-trous tap loads one
-/// texel for both (of one chain: `COLOR.of(svgf::signal(signal))`).
+/// The accumulated colour in rgb, its luminance's standard deviation in alpha (`svgf_pack`): each
+/// a-trous tap loads one texel for both (of one chain: `COLOR.of(svgf::signal(signal))`).
 pub const COLOR: Output = Output::new(NAME, "color");
 /// First and second moments of the luminance.
 pub const MOMENTS: Output = Output::new(NAME, "moments");
@@ -58,7 +58,7 @@ pub fn new(
         inputs.extend([Input::texel(hit_distance).bound_as("in_hit_distance"), Input::texel(gbuffer::METAL_ROUGH)]);
     }
     let outputs = vec![
-        OutputDesc::storage(COLOR.of(run), vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(COLOR.of(run), COLOR_FORMAT, Preview::Color),
         OutputDesc::storage(MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
         OutputDesc::storage(HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
         OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
