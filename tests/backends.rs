@@ -17,7 +17,7 @@ use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
 use hybrid_rt::passes::{gbuffer::NO_ID, primary_rays};
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::{LoadOptions, Scene, builtin, load_gltf};
 use std::sync::Arc;
 
@@ -26,8 +26,7 @@ const H: u32 = 72;
 
 fn render(ctx: &Arc<Context>, scene: Scene, backend: Backend) -> Renderer {
     let settings = Settings { width: W, height: H, primary_rays: true, start_time: 0.5, ..Default::default() };
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
+    let mut r = common::renderer(ctx, scene, settings, backend);
     r.render_frame().unwrap();
     r
 }
@@ -190,7 +189,7 @@ fn closed_meshes_do_not_leak_at_edges_and_vertices() {
     for backend in backends {
         let settings = Settings { width: 8, height: 8, ..Default::default() };
         let shaders = ShaderLibrary::embedded();
-        let mut r = Renderer::new(&ctx, &shaders, scene.clone(), settings, &CameraChoice::Default, backend).unwrap();
+        let mut r = common::renderer(&ctx, scene.clone(), settings, backend);
         let (hits, _) = r.trace_rays(&shaders, &rays, false, 1).unwrap();
         let leaks = hits.iter().filter(|h| !h.is_hit()).count();
         assert_eq!(leaks, 0, "{backend:?}: {leaks} of {} rays leaked through edges or vertices", rays.len());
@@ -209,15 +208,7 @@ fn masked_shadows_follow_the_alpha_texture() {
         if ctx.caps.supports_ray_query() { vec![Backend::Compute, Backend::RayQuery] } else { vec![Backend::Compute] };
     for backend in backends {
         let settings = Settings { width: 128, height: 128, ..Default::default() };
-        let mut r = Renderer::new(
-            &ctx,
-            &ShaderLibrary::embedded(),
-            builtin::alpha_shadow(),
-            settings,
-            &CameraChoice::Default,
-            backend,
-        )
-        .unwrap();
+        let mut r = common::renderer(&ctx, builtin::alpha_shadow(), settings, backend);
         r.render_frame().unwrap();
         let img = r.read_outputs(&[passes::gbuffer::IDS, r.shadow_visibility()]).unwrap();
         let view = r.last_view.unwrap();
@@ -268,15 +259,7 @@ fn hard_shadows_have_no_acne_and_keep_contact() {
     let (w, h) = (160u32, 120u32);
     for backend in backends {
         let settings = Settings { width: w, height: h, ..Default::default() };
-        let mut r = Renderer::new(
-            &ctx,
-            &ShaderLibrary::embedded(),
-            builtin::shadow_test(),
-            settings,
-            &CameraChoice::Default,
-            backend,
-        )
-        .unwrap();
+        let mut r = common::renderer(&ctx, builtin::shadow_test(), settings, backend);
         r.render_frame().unwrap();
         let img = r.read_outputs(&[passes::gbuffer::IDS, r.shadow_visibility()]).unwrap();
         let view = r.last_view.unwrap();

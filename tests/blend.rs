@@ -7,9 +7,9 @@
 mod common;
 
 use glam::{Vec3, Vec4};
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::passes::pathtrace;
-use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{Environment, RenderMode, Settings};
 use hybrid_rt::scene::{AlphaMode, Camera, Instance, Material, Scene, builtin};
 use std::sync::Arc;
 
@@ -50,18 +50,8 @@ fn mean(ctx: &Arc<Context>, scene: Scene, reference: bool, frames: u32) -> f64 {
         mode: if reference { RenderMode::Reference { seed: 1, max_bounces: 16 } } else { RenderMode::default() },
         ..Default::default()
     };
-    let mut r = Renderer::new(
-        ctx,
-        &ShaderLibrary::embedded(),
-        scene,
-        settings,
-        &CameraChoice::Default,
-        common::auto_backend(ctx),
-    )
-    .unwrap();
-    for _ in 0..frames {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, common::auto_backend(ctx));
+    common::render_frames(&mut r, frames);
     let output = if reference { pathtrace::COLOR } else { r.hdr_output() };
     let img = r.read_output(output).unwrap();
     let px = img.as_f32().unwrap();

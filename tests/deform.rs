@@ -21,7 +21,7 @@ use hybrid_rt::gpu::{Context, ShaderLibrary};
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
 use hybrid_rt::passes::{gbuffer::NO_ID, primary_rays};
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, morph_test_facts as facts};
 use hybrid_rt::scene::{Pose, Scene};
 use std::sync::Arc;
@@ -50,8 +50,7 @@ fn render(ctx: &Arc<Context>, backend: Backend) -> (Renderer, Vec<Vec<CpuImage>>
         ..Default::default()
     };
     let scene = builtin::morph_test();
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
+    let mut r = common::renderer(ctx, scene, settings, backend);
     let mut images = Vec::new();
     for frame in 0..FRAMES {
         r.render_frame().unwrap();

@@ -13,12 +13,12 @@
 
 mod common;
 
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::metrics;
 use hybrid_rt::passes;
 use hybrid_rt::passes::svgf::{self, atrous};
-use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{RenderMode, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, checker_test_facts as facts};
 use hybrid_rt::scene::{LoadOptions, Scene, load_gltf};
 use std::sync::Arc;
@@ -45,15 +45,13 @@ fn settings(denoiser: bool) -> Settings {
 }
 
 fn renderer(ctx: &Arc<Context>, scene: Scene, s: Settings) -> Renderer {
-    Renderer::new(ctx, &ShaderLibrary::embedded(), scene, s, &CameraChoice::Default, common::auto_backend(ctx)).unwrap()
+    common::renderer(ctx, scene, s, common::auto_backend(ctx))
 }
 
 fn reference(ctx: &Arc<Context>, scene: Scene, spp: u32) -> CpuImage {
     let s = Settings { mode: RenderMode::Reference { seed: 11, max_bounces: 2 }, ..settings(false) };
     let mut r = renderer(ctx, scene, s);
-    for _ in 0..spp {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, spp);
     r.read_output(r.hdr_output()).unwrap()
 }
 
@@ -69,9 +67,7 @@ fn mean(v: &[f64]) -> f64 {
 fn albedo_checkerboard_stays_sharp() {
     let ctx = common::validated_context();
     let mut r = renderer(&ctx, builtin::checker_test(), settings(true));
-    for _ in 0..16 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 16);
     let imgs = r.read_outputs(&[passes::composite::COLOR, passes::gbuffer::BASE_COLOR, passes::gbuffer::IDS]).unwrap();
     let (l, albedo) = (lum(&imgs[0]), lum(&imgs[1]));
     // Light on the wall varies slowly; the albedo jumps by 8x between cells. Compare each
@@ -194,9 +190,7 @@ fn curved_surfaces_are_not_faceted() {
     let ctx = common::validated_context();
     let s = Settings { width: 128, height: 64, ..settings(true) };
     let mut r = renderer(&ctx, builtin::facet_test(), s);
-    for _ in 0..8 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 8);
     let last = hybrid_rt::passes::svgf::SvgfSettings::default().iterations - 1;
     let diffuse = atrous::DIFFUSE.of(svgf::iteration(atrous::PAIR, last));
     let specular = atrous::SPECULAR.of(svgf::iteration(atrous::PAIR, last));

@@ -11,11 +11,10 @@
 mod common;
 
 use hybrid_rt::backend::Backend;
-use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::graph::Resource;
 use hybrid_rt::image_io::{CpuImage, Texels};
 use hybrid_rt::passes;
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::Settings;
 use std::path::Path;
 use std::process::Command;
 
@@ -30,7 +29,6 @@ fn bits(img: &CpuImage) -> Vec<u32> {
 #[test]
 fn same_settings_and_seed_give_identical_frames_on_each_backend() {
     let ctx = common::validated_context();
-    let shaders = ShaderLibrary::embedded();
     let mut backends = vec![Backend::Compute];
     if ctx.caps.supports_ray_query() {
         backends.push(Backend::RayQuery);
@@ -41,12 +39,9 @@ fn same_settings_and_seed_give_identical_frames_on_each_backend() {
     for backend in backends {
         let run = || {
             let settings = Settings { width: 40, height: 24, taa: true, seed: 7, ..Default::default() };
-            let mut r =
-                Renderer::new(&ctx, &shaders, scene.clone(), settings, &CameraChoice::Default, backend).unwrap();
+            let mut r = common::renderer(&ctx, scene.clone(), settings, backend);
             // Several frames: the ball moves and the temporal passes blend their histories.
-            for _ in 0..4 {
-                r.render_frame().unwrap();
-            }
+            common::render_frames(&mut r, 4);
             let names = r.graph.output_order.clone();
             let images = r.read_outputs(&names).unwrap();
             names.into_iter().zip(images.iter().map(bits)).collect::<Vec<_>>()

@@ -4,10 +4,9 @@
 mod common;
 
 use glam::{Vec2, Vec3};
-use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::passes;
 use hybrid_rt::passes::gbuffer::NO_ID;
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
 
 const W: u32 = 128;
@@ -16,8 +15,7 @@ const H: u32 = 96;
 fn renderer(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, start_time: f32) -> Renderer {
     let settings = Settings { width: W, height: H, start_time, ..Default::default() };
     let backend = common::auto_backend(ctx);
-    Renderer::new(ctx, &ShaderLibrary::embedded(), builtin::gbuffer_test(), settings, &CameraChoice::Default, backend)
-        .expect("renderer")
+    common::renderer(ctx, builtin::gbuffer_test(), settings, backend)
 }
 
 /// Ray-sphere intersection distance along a unit direction from the origin.

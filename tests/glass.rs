@@ -14,9 +14,9 @@
 mod common;
 
 use glam::{DVec3, Vec3};
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::passes::pathtrace;
-use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{Environment, RenderMode, Settings};
 use hybrid_rt::scene::{Camera, Instance, Material, Scene, builtin, load_gltf};
 use std::sync::Arc;
 
@@ -53,11 +53,8 @@ fn furnace(ctx: &Arc<Context>, scene: Scene, size: u32, spp: u32, seed: u32) -> 
         ..Default::default()
     };
     let backend = common::auto_backend(ctx);
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
-    for _ in 0..spp {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, backend);
+    common::render_frames(&mut r, spp);
     luminances(&r.read_output(pathtrace::COLOR).unwrap())
 }
 
@@ -78,11 +75,8 @@ fn hybrid_furnace(ctx: &Arc<Context>, scene: Scene, size: u32, frames: u32) -> V
     let settings =
         Settings { width: size, height: size, environment: Environment::Constant(Vec3::ONE), ..Default::default() };
     let backend = common::auto_backend(ctx);
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
-    for _ in 0..frames {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, backend);
+    common::render_frames(&mut r, frames);
     luminances(&r.read_output(r.hdr_output()).unwrap())
 }
 

@@ -24,10 +24,9 @@
 
 mod common;
 
-use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
-use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{RenderMode, Settings};
 use hybrid_rt::scene::{LoadOptions, load_gltf};
 
 const SIZE: u32 = 64;
@@ -56,11 +55,8 @@ fn reference(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, base: &Settings, see
     let settings = Settings { mode: RenderMode::Reference { seed, max_bounces: 2 }, ..base.clone() };
     let scene = load_gltf(&common::default_scene(), &LoadOptions::default()).unwrap();
     let backend = common::auto_backend(ctx);
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
-    for _ in 0..FRAMES {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, backend);
+    common::render_frames(&mut r, FRAMES);
     luminance(&rgb(&r.read_output(r.hdr_output()).unwrap()))
 }
 
@@ -77,13 +73,12 @@ fn rgb(img: &CpuImage) -> Vec<[f64; 3]> {
 fn accumulated_hybrid_frames_approach_the_two_bounce_reference() {
     let ctx = common::validated_context();
     let backend = common::auto_backend(&ctx);
-    let shaders = ShaderLibrary::embedded();
     let scene = || load_gltf(&common::default_scene(), &LoadOptions::default()).unwrap();
     let mut base =
         Settings { width: SIZE, height: SIZE, frame_dt: 0.0, denoiser: false, taa: true, ..Default::default() };
     base.radiance_cache.enabled = false;
 
-    let mut hybrid = Renderer::new(&ctx, &shaders, scene(), base.clone(), &CameraChoice::Default, backend).unwrap();
+    let mut hybrid = common::renderer(&ctx, scene(), base.clone(), backend);
     let mut sum = vec![[0.0f64; 3]; (SIZE * SIZE) as usize];
     for _ in 0..FRAMES {
         hybrid.render_frame().unwrap();

@@ -16,11 +16,11 @@
 mod common;
 
 use hybrid_rt::backend::Backend;
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::graph::Output;
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes::{composite, gbuffer, taa};
-use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{RenderMode, Settings};
 use hybrid_rt::scene::Scene;
 use hybrid_rt::scene::builtin_many_lights::{facts, many_lights};
 use std::sync::Arc;
@@ -82,10 +82,8 @@ fn render(
     frames: u32,
     outputs: &[Output],
 ) -> Vec<CpuImage> {
-    let mut r = Renderer::new(ctx, &ShaderLibrary::embedded(), scene, s, &CameraChoice::Default, backend).unwrap();
-    for _ in 0..frames {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, s, backend);
+    common::render_frames(&mut r, frames);
     r.read_outputs(outputs).unwrap()
 }
 
@@ -93,7 +91,7 @@ fn render(
 /// the light sampling estimates, without the denoiser's clamps.
 fn averaged_raw(ctx: &Arc<Context>, scene: Scene, s: Settings, backend: Backend, frames: u32) -> Vec<f64> {
     let s = Settings { denoiser: false, taa: false, ..s };
-    let mut r = Renderer::new(ctx, &ShaderLibrary::embedded(), scene, s, &CameraChoice::Default, backend).unwrap();
+    let mut r = common::renderer(ctx, scene, s, backend);
     let mut sum = vec![0.0; (SIZE * SIZE) as usize];
     for _ in 0..frames {
         r.render_frame().unwrap();
@@ -181,11 +179,8 @@ fn no_light_leaks_through_the_wall() {
 
 fn reference(ctx: &Arc<Context>, backend: Backend, max_bounces: u32, seed: u32) -> f64 {
     let s = Settings { mode: RenderMode::Reference { seed, max_bounces }, ..settings(false) };
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), many_lights(), s, &CameraChoice::Default, backend).unwrap();
-    for _ in 0..REFERENCE_SPP {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, many_lights(), s, backend);
+    common::render_frames(&mut r, REFERENCE_SPP);
     let out = r.hdr_output();
     mean_lum(&r.read_output(out).unwrap())
 }

@@ -18,11 +18,11 @@
 
 mod common;
 
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::image_io::{self, CpuImage};
 use hybrid_rt::metrics::{self, HdrFlipOptions};
 use hybrid_rt::passes::pathtrace;
-use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{Environment, RenderMode, Settings};
 use hybrid_rt::scene::{LoadOptions, load_gltf};
 use hybrid_rt::world::brdf::BrdfModel;
 use std::path::{Path, PathBuf};
@@ -70,11 +70,8 @@ fn render_reference(ctx: &Arc<Context>, dir: &Path, brdf: BrdfModel, spp: u32, s
         ..Default::default()
     };
     let backend = common::auto_backend(ctx);
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
-    for _ in 0..spp {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, backend);
+    common::render_frames(&mut r, spp);
     r.read_output(pathtrace::COLOR).unwrap()
 }
 

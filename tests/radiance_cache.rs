@@ -9,10 +9,10 @@
 
 mod common;
 
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::image_io::{self, CpuImage};
 use hybrid_rt::metrics;
-use hybrid_rt::render::{CameraChoice, Environment, Renderer, Settings};
+use hybrid_rt::render::{Environment, Settings};
 use hybrid_rt::scene::gltf::{LoadOptions, load_gltf};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -51,8 +51,7 @@ fn hybrid_luminance(ctx: &Arc<Context>, name: &str, cache: bool, half_rate: bool
     settings.radiance_cache.enabled = cache;
     settings.gi.half_rate = half_rate;
     let backend = common::auto_backend(ctx);
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap();
+    let mut r = common::renderer(ctx, scene, settings, backend);
     let mut sum = vec![0.0; (size.0 * size.1) as usize];
     for frame in 1..=FRAMES {
         r.render_frame().unwrap();

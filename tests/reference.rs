@@ -20,10 +20,10 @@ mod common;
 
 use glam::{DVec3, Quat, Vec2, Vec3};
 use hybrid_rt::backend::Backend;
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::image_io::{self, CpuImage, Texels};
 use hybrid_rt::passes::pathtrace;
-use hybrid_rt::render::{CameraChoice, Environment, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{Environment, RenderMode, Renderer, Settings};
 use hybrid_rt::scene::{Camera, Instance, Light, LightKind, LoadOptions, Material, Node, Scene, builtin, load_gltf};
 use hybrid_rt::world::brdf::BrdfModel;
 use hybrid_rt::world::environment;
@@ -61,13 +61,7 @@ fn reference_model(
         brdf,
         ..Default::default()
     };
-    Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, backend).unwrap()
-}
-
-fn render(r: &mut Renderer, frames: u32) {
-    for _ in 0..frames {
-        r.render_frame().unwrap();
-    }
+    common::renderer(ctx, scene, settings, backend)
 }
 
 /// RGB of every pixel of pathtrace.color.
@@ -175,7 +169,7 @@ fn spot_cone(cos_axis: f64, cos_inner: f64, cos_outer: f64) -> f64 {
 /// Renders the lit plane and checks its mean against `expected` (RGB).
 fn check_lit_plane(ctx: &Arc<Context>, name: &str, scene: Scene, env: Environment, spp: u32, expected: DVec3) {
     let mut r = reference(ctx, scene, env, LIT_SIZE, 1, 1, common::auto_backend(ctx));
-    render(&mut r, spp);
+    common::render_frames(&mut r, spp);
     let px = color(&mut r);
     for c in 0..3 {
         let (mean, se) = mean_and_error(&px.iter().map(|p| p[c]).collect::<Vec<_>>());
@@ -523,7 +517,7 @@ fn white_furnace() {
             let env = Environment::Constant(Vec3::ONE);
             let size = (FURNACE_SIZE, FURNACE_SIZE);
             let mut r = reference_model(&ctx, furnace_scene(b), env, size, (seed, 256), backend, model);
-            render(&mut r, spp);
+            common::render_frames(&mut r, spp);
             runs.push(color(&mut r));
         }
         // E(mu) tabulated over the view cosines the inner pixels have, interpolated linearly.
@@ -644,7 +638,7 @@ fn error_falls_as_one_over_sqrt_spp() {
     let sky = Environment::Constant(Vec3::new(0.1, 0.15, 0.25));
     let truth = {
         let mut r = reference(&ctx, soft_scene(), sky.clone(), size, 1000, 256, backend);
-        render(&mut r, 1024);
+        common::render_frames(&mut r, 1024);
         color(&mut r)
     };
     let mut points = Vec::new();
@@ -652,7 +646,7 @@ fn error_falls_as_one_over_sqrt_spp() {
         let mut r = reference(&ctx, soft_scene(), sky.clone(), size, 7, 256, backend);
         let mut done = 0;
         for spp in [4u32, 16, 64] {
-            render(&mut r, spp - done);
+            common::render_frames(&mut r, spp - done);
             done = spp;
             points.push(((spp as f64).ln(), rmse(&color(&mut r), &truth).ln()));
         }
@@ -686,7 +680,7 @@ fn equal_seeds_give_identical_images() {
     let backend = common::auto_backend(&ctx);
     let run = |seed| {
         let mut r = reference(&ctx, cornell(), Environment::default(), (16, 16), seed, 256, backend);
-        render(&mut r, 4);
+        common::render_frames(&mut r, 4);
         raw_bits(&mut r)
     };
     let (a, b, c) = (run(5), run(5), run(6));
@@ -708,7 +702,7 @@ fn backends_converge_to_the_same_image() {
     let mut images = Vec::new();
     for (backend, seed) in [(Backend::Compute, 11), (Backend::RayQuery, 12)] {
         let mut r = reference(&ctx, cornell(), Environment::default(), (24, 24), seed, 256, backend);
-        render(&mut r, spp);
+        common::render_frames(&mut r, spp);
         images.push(color(&mut r));
     }
     // Paired per-pixel differences of two independent unbiased estimates have mean zero (one

@@ -10,12 +10,12 @@
 mod common;
 
 use glam::{Quat, Vec3};
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
 use hybrid_rt::passes::gbuffer::NO_ID;
 use hybrid_rt::passes::pathtrace;
-use hybrid_rt::render::{self, CameraChoice, Environment, RenderMode, Renderer, Settings, View};
+use hybrid_rt::render::{self, Environment, RenderMode, Settings, View};
 use hybrid_rt::scene::{Instance, LoadOptions, Material, Node, Scene, builtin, load_gltf};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -104,18 +104,8 @@ impl Picture {
 /// `FRAMES` hybrid frames of `scene` at a frozen pose with environment `env`.
 fn hybrid(ctx: &Arc<Context>, scene: Scene, env: Environment) -> Picture {
     let settings = Settings { width: W, height: H, frame_dt: 0.0, environment: env, ..Default::default() };
-    let mut r = Renderer::new(
-        ctx,
-        &ShaderLibrary::embedded(),
-        scene,
-        settings,
-        &CameraChoice::Default,
-        common::auto_backend(ctx),
-    )
-    .unwrap();
-    for _ in 0..FRAMES {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, common::auto_backend(ctx));
+    common::render_frames(&mut r, FRAMES);
     let mut images = r.read_outputs(&[r.hdr_output(), passes::gbuffer::IDS]).unwrap();
     let ids = images.remove(1);
     let hdr = images.remove(0);
@@ -138,18 +128,8 @@ fn reference(ctx: &Arc<Context>, scene: Scene, env: Environment, like: &Picture)
         mode: RenderMode::Reference { seed: 3, max_bounces: 2 },
         ..Default::default()
     };
-    let mut r = Renderer::new(
-        ctx,
-        &ShaderLibrary::embedded(),
-        scene,
-        settings,
-        &CameraChoice::Default,
-        common::auto_backend(ctx),
-    )
-    .unwrap();
-    for _ in 0..REFERENCE_SPP {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings, common::auto_backend(ctx));
+    common::render_frames(&mut r, REFERENCE_SPP);
     let hdr = r.read_output(pathtrace::COLOR).unwrap();
     Picture { hdr, ids: like.ids.clone(), lighting: r.lighting.clone(), view: like.view }
 }

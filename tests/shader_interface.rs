@@ -10,7 +10,7 @@ mod common;
 
 use hybrid_rt::gpu::{BindingKind, RAY_VARIANTS, ShaderLibrary};
 use hybrid_rt::graph::ShaderInterface;
-use hybrid_rt::render::{CameraChoice, RenderMode, Renderer, Settings};
+use hybrid_rt::render::{RenderMode, Settings};
 use hybrid_rt::scene::builtin;
 use spirv::Module;
 use std::collections::BTreeMap;
@@ -28,7 +28,7 @@ fn every_pass_matches_its_shader() {
     let mut checked = Vec::new();
     for settings in configs {
         let scene = builtin::soft_shadow_test();
-        let r = Renderer::new(&ctx, &shaders, scene, settings, &CameraChoice::Default, backend).unwrap();
+        let r = common::renderer(&ctx, scene, settings, backend);
         for (pass, interface) in r.graph.shader_interfaces() {
             for key in variants(&interface.shader) {
                 let module = Module::parse(&shaders.get(&key).unwrap()).unwrap_or_else(|e| panic!("{key}: {e}"));

@@ -14,10 +14,10 @@ mod common;
 use glam::Vec3;
 use hybrid_rt::accel::REBUILD_EVERY;
 use hybrid_rt::backend::Backend;
-use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::gpu::Context;
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes::{gbuffer, gbuffer::NO_ID, primary_rays};
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::builtin_skin::{facts, skin_test};
 use hybrid_rt::scene::{Scene, load_gltf};
 use std::sync::Arc;
@@ -75,12 +75,8 @@ fn frame_images(
     start_time: f32,
     frames: u32,
 ) -> (Renderer, Vec<CpuImage>) {
-    let mut r =
-        Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings(start_time), &CameraChoice::Default, backend)
-            .unwrap();
-    for _ in 0..frames {
-        r.render_frame().unwrap();
-    }
+    let mut r = common::renderer(ctx, scene, settings(start_time), backend);
+    common::render_frames(&mut r, frames);
     let images = r.read_outputs(&OUTPUTS).unwrap();
     (r, images)
 }

@@ -22,8 +22,7 @@
 mod common;
 
 use hybrid_rt::bench::soak;
-use hybrid_rt::gpu::ShaderLibrary;
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::Settings;
 
 #[test]
 fn ten_thousand_frames_keep_memory_flat_and_validation_silent() {
@@ -37,8 +36,7 @@ fn ten_thousand_frames_keep_memory_flat_and_validation_silent() {
     let scene = hybrid_rt::scene::load_gltf(&common::default_scene(), &Default::default()).unwrap();
     assert!(scene.is_animated(), "the soak needs a moving scene");
     let settings = Settings { width: 32, height: 32, taa: true, ..Default::default() };
-    let shaders = ShaderLibrary::embedded();
-    let mut r = Renderer::new(&ctx, &shaders, scene, settings, &CameraChoice::Default, backend).unwrap();
+    let mut r = common::renderer(&ctx, scene, settings, backend);
     let opts = soak::Options { frames: 10_000, warmup: 500, every: 500 };
     let result = soak::run(&mut r, &opts, &|_| {}).unwrap();
     eprintln!("{} backend\n{}", backend.variant(), soak::table(&result));

@@ -9,10 +9,9 @@
 mod common;
 
 use glam::{Vec2, Vec3};
-use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::passes;
 use hybrid_rt::passes::shadows::{HARD_VISIBILITY, ShadowSettings, VISIBILITY};
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, shadow_test_facts as facts};
 
 const W: u32 = 96;
@@ -32,8 +31,7 @@ fn renderer_with(
     settings: Settings,
 ) -> Renderer {
     let settings = Settings { width: W, height: H, ..settings };
-    Renderer::new(ctx, &ShaderLibrary::embedded(), scene, settings, &CameraChoice::Default, common::auto_backend(ctx))
-        .unwrap()
+    common::renderer(ctx, scene, settings, common::auto_backend(ctx))
 }
 
 /// Fraction of the sphere light's solid angle seen from floor point p past the box, by a
@@ -95,9 +93,7 @@ fn soft_shadows_converge_with_adaptive_counts() {
         assert!(c == settings.s_max as f32, "first frame: count {c} at ({x},{y}), expected s_max");
     }
     // From s_max the count steps down by one after each 4 stable frames: 21 frames reach 1.
-    for _ in 0..25 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 25);
     let imgs =
         r.read_outputs(&[VISIBILITY, passes::shadows::trace::SAMPLE_COUNT, passes::shadows::trace::RING0]).unwrap();
     // Errors over the penumbra, where there is something to get wrong.
@@ -150,9 +146,7 @@ fn a_tight_budget_lowers_the_counts() {
     let ctx = common::validated_context();
     let tight = ShadowSettings { budget_fraction: 0.002, ..Default::default() };
     let mut r = renderer(&ctx, builtin::soft_shadow_test(), tight);
-    for _ in 0..4 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 4);
     let counts = r.read_output(passes::shadows::trace::SAMPLE_COUNT).unwrap();
     let max = (0..W * H).map(|i| counts.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
     assert!(max < tight.s_max as f32, "the budget did not cap the counts (max {max})");
@@ -178,9 +172,7 @@ fn hard_lights_use_one_ray_and_no_filter() {
     drop(r);
     // Every pass (`--full`): the filter runs and leaves hard lights alone.
     let mut r = renderer_with(&ctx, builtin::shadow_test(), Settings { full: true, ..Default::default() });
-    for _ in 0..3 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 3);
     let imgs = r
         .read_outputs(&[
             passes::gbuffer::IDS,

@@ -10,12 +10,11 @@
 
 mod common;
 
-use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::graph::Output;
 use hybrid_rt::passes;
 use hybrid_rt::passes::svgf::{self, SvgfSettings};
 use hybrid_rt::render::frame::{TEST_INPUT, TEST_SIGNAL};
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
 
 const W: u32 = 64;
@@ -31,8 +30,7 @@ fn renderer_with(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, denoise: SvgfSet
     let settings =
         Settings { width: W, height: H, test_signal: true, denoise, start_time: 0.25, frame_dt, ..Default::default() };
     let backend = common::auto_backend(ctx);
-    Renderer::new(ctx, &ShaderLibrary::embedded(), builtin::gbuffer_test(), settings, &CameraChoice::Default, backend)
-        .unwrap()
+    common::renderer(ctx, builtin::gbuffer_test(), settings, backend)
 }
 
 /// An output of the test signal's temporal stage (`svgf_temporal_signal.<output>`).
@@ -212,9 +210,7 @@ fn converged_pixels_skip_the_later_iterations() {
     for converged in [SvgfSettings::default().converged, 0.0] {
         let mut r = renderer_with(&ctx, SvgfSettings { converged, ..no_luminance_stopping() }, 0.0);
         r.inject(INPUT, pattern.clone()).unwrap();
-        for _ in 0..6 {
-            r.render_frame().unwrap();
-        }
+        common::render_frames(&mut r, 6);
         let imgs = r.read_outputs(&[atrous(0), atrous(3), passes::gbuffer::IDS]).unwrap();
         let mut change = 0.0f32;
         for y in 0..H {

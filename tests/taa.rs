@@ -4,10 +4,9 @@
 
 mod common;
 
-use hybrid_rt::gpu::ShaderLibrary;
 use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
-use hybrid_rt::render::{CameraChoice, Renderer, Settings};
+use hybrid_rt::render::{Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, gbuffer_test_facts as facts};
 
 const W: u32 = 64;
@@ -15,15 +14,7 @@ const H: u32 = 48;
 
 fn renderer(ctx: &std::sync::Arc<hybrid_rt::gpu::Context>, frame_dt: f32) -> Renderer {
     let settings = Settings { width: W, height: H, taa: true, frame_dt, start_time: 0.2, ..Default::default() };
-    Renderer::new(
-        ctx,
-        &ShaderLibrary::embedded(),
-        builtin::gbuffer_test(),
-        settings,
-        &CameraChoice::Default,
-        common::auto_backend(ctx),
-    )
-    .unwrap()
+    common::renderer(ctx, builtin::gbuffer_test(), settings, common::auto_backend(ctx))
 }
 
 fn lum(img: &CpuImage, x: u32, y: u32) -> f32 {
@@ -34,9 +25,7 @@ fn lum(img: &CpuImage, x: u32, y: u32) -> f32 {
 fn static_view_antialiases_edges_and_keeps_flat_regions() {
     let ctx = common::validated_context();
     let mut r = renderer(&ctx, 0.0);
-    for _ in 0..16 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 16);
     let imgs = r.read_outputs(&[passes::taa::COLOR, passes::composite::COLOR, passes::gbuffer::IDS]).unwrap();
     let (taa, raw, ids) = (&imgs[0], &imgs[1], &imgs[2]);
     // Flat plane interior: the same brightness with and without TAA.
@@ -75,9 +64,7 @@ fn static_view_antialiases_edges_and_keeps_flat_regions() {
 fn disocclusion_and_camera_cut_drop_the_history() {
     let ctx = common::validated_context();
     let mut r = renderer(&ctx, 1.0 / 30.0);
-    for _ in 0..8 {
-        r.render_frame().unwrap();
-    }
+    common::render_frames(&mut r, 8);
     let before = r.read_output(passes::gbuffer::IDS).unwrap();
     r.render_frame().unwrap();
     let imgs = r.read_outputs(&[passes::taa::COLOR, passes::composite::COLOR, passes::gbuffer::IDS]).unwrap();

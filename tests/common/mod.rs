@@ -67,6 +67,25 @@ pub fn auto_backend(ctx: &Context) -> hybrid_rt::backend::Backend {
     hybrid_rt::backend::resolve(&ctx.caps, hybrid_rt::backend::BackendChoice::Auto).expect("auto backend").0
 }
 
+/// A renderer of `scene` with the embedded shaders and the scene's default camera.
+pub fn renderer(
+    ctx: &Arc<Context>,
+    scene: hybrid_rt::scene::Scene,
+    settings: hybrid_rt::render::Settings,
+    backend: hybrid_rt::backend::Backend,
+) -> hybrid_rt::render::Renderer {
+    let shaders = hybrid_rt::gpu::ShaderLibrary::embedded();
+    hybrid_rt::render::Renderer::new(ctx, &shaders, scene, settings, &hybrid_rt::render::CameraChoice::Default, backend)
+        .expect("renderer")
+}
+
+/// Renders `frames` frames.
+pub fn render_frames(r: &mut hybrid_rt::render::Renderer, frames: u32) {
+    for _ in 0..frames {
+        r.render_frame().expect("frame");
+    }
+}
+
 /// A root node at `translation`, unrotated and unscaled (test scenes built in code).
 pub fn node(name: &str, translation: glam::Vec3) -> hybrid_rt::scene::Node {
     hybrid_rt::scene::Node {
