@@ -27,8 +27,6 @@ layout(push_constant) uniform SvgfParams {
 
 bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
 
-
-
 // Can the previous frame's sample at `prev_px` stand for this pixel? Same instance, similar
 // depth (relative to how fast depth changes here) and similar geometric normal (Falcor's
 // tests).

@@ -33,7 +33,9 @@ layout(set = 1, binding = 6, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 7, rgba16f) uniform writeonly image2D out_diffuse;
 layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D out_specular;
 
-vec4 load_signal(int s, ivec2 q) { return svgf_unpack(s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)); }
+vec4 load_signal(int s, ivec2 q) {
+    return svgf_unpack(s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q));
+}
 
 float load_history_length(int s, ivec2 q) {
     return (s == 0 ? imageLoad(in_diffuse_history_length, q) : imageLoad(in_specular_history_length, q)).r;
@@ -56,7 +58,6 @@ float load_history_length(int s, ivec2 q) { return imageLoad(in_history_length, 
 
 void store_signal(int s, ivec2 q, vec4 v) { imageStore(out_color, q, svgf_pack(v.rgb, v.a)); }
 #endif
-
 
 const float B3[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
 

@@ -8,11 +8,12 @@
 // neither poisons the history.
 //
 // The colour's alpha holds its luminance variance (as the deviation, svgf_pack), what the
-// a-trous iterations scale their luminance weight by: from the temporal moments, or, while the history is shorter than
-// SVGF_MOMENTS_FRAMES, estimated over the same 7x7 neighbourhood of this frame's samples with
-// the edge-stopping weights (and boosted by 4 / history, as Falcor). Schied et al. estimate it
-// from the neighbours' accumulated moments in a pass of its own; one frame's samples are what
-// a young history holds (all of it at a disocclusion), and the window is loaded anyway.
+// a-trous iterations scale their luminance weight by: from the temporal moments, or, while the
+// history is shorter than SVGF_MOMENTS_FRAMES, estimated over the same 7x7 neighbourhood of
+// this frame's samples with the edge-stopping weights (and boosted by 4 / history, as
+// Falcor). Schied et al. estimate it from the neighbours' accumulated moments in a pass of its
+// own; one frame's samples are what a young history holds (all of it at a disocclusion), and
+// the window is loaded anyway.
 //
 // With SVGF_REFLECTION_MOTION defined (the specular chain behind the reflections pass) the
 // history of a narrow lobe is fetched where the reflected object was, not where the surface
