@@ -9,9 +9,10 @@ use serde::{Deserialize, Serialize};
 /// joined by `-`: `d` SVGF à-trous iterations (0 = denoiser off), `s` shadow rays per pixel
 /// and area light at most (s_max), `b` GI bounces, `r` reflection rays per pixel, `t0`
 /// when TAA is off, `c0` when the radiance cache is off, `g2`/`g1` when gi traces half of the
-/// pixels each frame or all of them (against the default), and `f1` when every pass runs instead of the scene's frame plan
-/// (src/render/plan.rs): a pair differing only in `f` shows what the plan saves and costs. Settings left out of a name take the defaults (`d4-s5-b1-r1`, TAA on:
-/// the renderer's defaults, and what `hybrid-rt render` draws).
+/// pixels each frame or all of them (against the default), and `f1` when every pass runs
+/// instead of the scene's frame plan (src/render/plan.rs): a pair differing only in `f` shows
+/// what the plan saves and costs. Settings left out of a name take the defaults
+/// (`d4-s5-b1-r1`, TAA on: the renderer's defaults, and what `hybrid-rt render` draws).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Config {
     pub denoise_iterations: u32,
@@ -145,8 +146,9 @@ impl Config {
 /// The default configurations: each axis moved away from the renderer's defaults (d4-s5-b1-r1)
 /// on its own, once with the denoiser on and once with it off, plus the cheapest and the most
 /// expensive corners, and the frame without the radiance cache: with one bounce, and as a
-/// 1-spp path tracer, and gi at full rate. The first 15 took ~5 minutes at 320x180 on a 2-core lavapipe;
-/// the full grid (5 x 3 x 2 x 2 x 2 = 120) would take hours and add few new front points.
+/// 1-spp path tracer, and gi at full rate. The first 15 took ~5 minutes at 320x180 on a
+/// 2-core lavapipe; the full grid (5 x 3 x 2 x 2 x 2 = 120) would take hours and add few new
+/// front points.
 pub const DEFAULT_CONFIGS: &[&str] = &[
     "d0-s5-b1-r1-t0", // no temporal filtering at all: the raw one-sample frame
     "d0-s1-b1-r1",

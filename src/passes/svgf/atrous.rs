@@ -14,9 +14,11 @@ use anyhow::Result;
 pub const NAME: &str = "svgf_atrous";
 /// The run name of the pair's iterations (`svgf_atrous_diffuse_specular_0`).
 pub const PAIR: &str = "diffuse_specular";
-/// A lone signal's filtered colour, its luminance's standard deviation in alpha (`COLOR.of(svgf::iteration(signal, i))`).
+/// A lone signal's filtered colour, its luminance's standard deviation in alpha
+/// (`COLOR.of(svgf::iteration(signal, i))`).
 pub const COLOR: Output = Output::new(NAME, "color");
-/// The pair's filtered diffuse signal, its luminance's standard deviation in alpha (`DIFFUSE.of(svgf::iteration(PAIR, i))`).
+/// The pair's filtered diffuse signal, its luminance's standard deviation in alpha
+/// (`DIFFUSE.of(svgf::iteration(PAIR, i))`).
 pub const DIFFUSE: Output = Output::new(NAME, "diffuse");
 /// The pair's filtered specular signal, its luminance's standard deviation in alpha.
 pub const SPECULAR: Output = Output::new(NAME, "specular");

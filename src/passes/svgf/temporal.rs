@@ -1,8 +1,9 @@
 //! svgf_temporal_<signal>: reprojected temporal accumulation of colour and luminance moments
-//! with a history length, and the colour's luminance variance (from the moments, or a 7x7
-//! spatial estimate while the history is young) in its alpha (shaders-glsl/svgf_temporal.comp). The specular chain behind the
-//! reflections pass reprojects a narrow lobe's history from the reflected object's virtual
-//! position instead (svgf_temporal_specular.comp, common/svgf_temporal.glsl).
+//! with a history length, and the colour's luminance deviation (from the moments, or a 7x7
+//! spatial estimate while the history is young) in its alpha (shaders-glsl/svgf_temporal.comp).
+//! The specular chain behind the reflections pass reprojects a narrow lobe's history from the
+//! reflected object's virtual position instead (svgf_temporal_specular.comp,
+//! common/svgf_temporal.glsl).
 
 use super::{COLOR_FORMAT, SvgfSettings, guide, signal};
 use crate::gpu::vk;
