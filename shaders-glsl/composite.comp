@@ -49,7 +49,7 @@ void main() {
     // Glass lets the share `transmission` of its diffuse light through instead (reflections
     // adds what comes through).
     MaterialInfo mi = materials[ids.y];
-    float transmission = mi.transmission;
+    float transmission = mr.w;
     // A blended surface covers the share alpha of the pixel; reflections adds what shows
     // through the rest.
     float cover = (mi.flags & MATERIAL_BLEND) != 0u ? imageLoad(g_base_color, px).a : 1.0;

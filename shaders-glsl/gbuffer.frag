@@ -18,7 +18,7 @@ layout(location = 0) out vec2 out_depth;        // gbuffer.depth: view depth (al
 layout(location = 1) out vec4 out_normal_geo;   // gbuffer.normal_geo: world geometric normal, facing the viewer
 layout(location = 2) out vec4 out_normal;       // gbuffer.normal: world shading normal (normal-mapped)
 layout(location = 3) out vec4 out_base_color;   // gbuffer.base_color: linear RGB, alpha
-layout(location = 4) out vec4 out_metal_rough;  // gbuffer.metal_rough: metallic, roughness, occlusion
+layout(location = 4) out vec4 out_metal_rough;  // gbuffer.metal_rough: metallic, roughness, occlusion, transmission
 layout(location = 5) out vec4 out_emissive;     // gbuffer.emissive: emitted radiance
 layout(location = 6) out vec2 out_motion;       // gbuffer.motion: pixels moved since the previous frame
 layout(location = 7) out uvec2 out_ids;         // gbuffer.ids: instance id, material id
@@ -57,7 +57,7 @@ void main() {
     out_normal_geo = vec4(ng, 0.0);
     out_normal = vec4(n, 0.0);
     out_base_color = s.base_color;
-    out_metal_rough = vec4(s.metallic, s.roughness, s.occlusion, 1.0);
+    out_metal_rough = vec4(s.metallic, s.roughness, s.occlusion, s.transmission);
     out_emissive = vec4(s.emissive, 0.0);
     out_motion = (ndc - prev_ndc) * 0.5 * vec2(frame.size);
     out_ids = uvec2(in_instance, inst.material);

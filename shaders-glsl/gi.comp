@@ -152,8 +152,13 @@ Estimate shade(ivec2 px) {
             ls = reservoir_light_sample(sp, r.light, r.u);
         }
         float cos_l = max(dot(n, ls.dir), 0.0);
-        bool visible = dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0 &&
-                       !trace_any(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
+        // What passes the see-through surfaces on the way scales the sample.
+        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0) {
+            ls.weight *= trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
+        } else {
+            ls.weight = vec3(0.0);
+        }
+        bool visible = dot(ls.weight, ls.weight) > 0.0;
         if (k == 0u) {
             if (!visible) continue;
             float w = mis_power(ls.pdf, cos_l * INV_PI);

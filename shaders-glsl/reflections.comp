@@ -53,28 +53,47 @@ vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
 }
 
 // Light through a transmissive surface toward v (KHR_materials_transmission): one path through
-// it, as the reference traces it (common/transmission.glsl), shaded where it leaves the glass.
+// it, as the reference traces it (common/transmission.glsl), shaded where it leaves the glass,
+// and for thin-walled glass a light sample through it.
 // Inside a volume the interface reflects or lets the path out (Beer-Lambert absorbing on the
 // way); a further transmissive surface is passed through, its reflection left out. The weight
 // excludes the surface's transmitted share, which the caller applies.
 #define TRANSMISSION_EVENTS 8u
+// Up to this many punctual lights, each is sampled through thin-walled glass.
+#define GLASS_LIGHTS 8u
 vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInput m, MaterialInfo mi, inout Rng rng) {
     m.dielectric_f0 = dielectric_f0(mi.ior);
     bool thin = mi.thickness <= 0.0;
     TransmissionSample ts = transmission_sample(m, thin, mi.ior, n, v, rng_next2(rng));
     vec3 weight = ts.weight;
-    if (dot(weight, weight) <= 0.0) return vec3(0.0);
     vec3 origin = offset_ray_origin(p, -ng, depth);
     vec3 dir = ts.l;
     vec3 absorption = thin ? vec3(0.0) : volume_absorption(mi);
     vec3 emitted = vec3(0.0);  // by the glass surfaces passed on the way
+    // Punctual lights behind thin-walled glass, through its transmitted lobe (the bulb in a glass
+    // shade): no ray can hit one, so light samples are the only way to them. Each of a few
+    // lights is sampled (a light chosen by power would rarely be the bulb close behind the
+    // glass, and then with a weight the denoiser clamps); of more, one chosen by power. Other
+    // lights are reached by the path below.
+    bool every_light = frame.light_count <= GLASS_LIGHTS;
+    uint samples = thin ? (every_light ? frame.light_count : 1u) : 0u;
+    [[dont_unroll]] for (uint k = 0u; k < samples; ++k) {
+        NeeSample ls = every_light ? sample_punctual_light(k, p, rng_next2(rng), 1.0) : light_sample(p, rng_next3(rng));
+        if (ls.pdf == 0.0 && dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) < 0.0) {
+            vec3 f = thin_transmission_eval_cos(m, n, v, ls.dir);
+            if (dot(f, f) > 0.0) {
+                emitted += f * ls.weight * trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
+            }
+        }
+    }
+    if (dot(weight, weight) <= 0.0) return emitted;
     for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
         if (h.instance == NO_HIT) return emitted + weight * env_eval(dir);
         if (any(greaterThan(absorption, vec3(0.0)))) weight *= exp(-absorption * h.t);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         MaterialInfo hm = materials[s.material];
-        float through = hm.transmission * (1.0 - s.mat.metallic);
+        float through = s.mat.transmission * (1.0 - s.mat.metallic);
         if (through <= 0.0) return emitted + weight * shade_hit(h, dir, rng);
         if (emitter_visible_side(h.instance, h.primitive, dir)) emitted += weight * s.mat.emissive;
         BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
@@ -136,7 +155,7 @@ void main() {
     // Glass: what it lets through joins the specular signal (composite leaves its share out of
     // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
     MaterialInfo mi = materials[imageLoad(g_ids, px).y];
-    float transmitted = mi.transmission * (1.0 - m.metallic);
+    float transmitted = mr.w * (1.0 - m.metallic);
     vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng) : vec3(0.0);
     // A blended surface covers the share alpha of the pixel (composite scales its own light by
     // it); the rest shows what lies behind, added here.

@@ -48,7 +48,9 @@ const uint FORCED[16] = uint[16](0u, 3u, 2u, 1u, 2u, 1u, 0u, 3u, 0u, 3u, 2u, 1u,
 // Low-discrepancy point n of the R2 sequence (Roberts 2018).
 vec2 r2(uint n) { return fract(vec2(0.5) + float(n) * vec2(0.7548776662, 0.5698402910)); }
 
-// Fraction of the shadow rays toward `count` points of light i that reach it. Points that send
+// Fraction of the shadow rays toward `count` points of light i that reach it, a ray through
+// see-through surfaces counting with the mean of what passes them (the signal is grey: tinted
+// glass casts a grey shadow of the same strength). Points that send
 // no light here (the back of a disk, outside a spot's cone) say nothing about occlusion and are
 // left out; with none left the light is unoccluded by definition (it sends nothing anyway).
 float trace_visibility(uint i, vec3 origin, ivec2 px, uint count) {
@@ -60,7 +62,8 @@ float trace_visibility(uint i, vec3 origin, ivec2 px, uint count) {
         if (dot(s.weight, s.weight) == 0.0) continue;
         tried += 1.0;
         float tmax = s.dist >= LIGHT_FAR ? 1e30 : s.dist * (1.0 - 1e-4);
-        if (!trace_any(origin, s.dir, 0.0, tmax, RAY_MASK_ALL)) visible += 1.0;
+        vec3 through = trace_transmittance(origin, s.dir, 0.0, tmax, RAY_MASK_ALL);
+        visible += (through.r + through.g + through.b) / 3.0;
     }
     return tried > 0.0 ? visible / tried : 1.0;
 }

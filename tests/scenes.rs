@@ -30,13 +30,14 @@ const REFERENCE_SPP: u32 = 8;
 /// The hybrid frame's mean surface luminance must lie within this factor of the reference's,
 /// either way. It denoises one sample per pixel, so it is not the reference, but a missing
 /// sun (71% of the default light on a horizontal surface), a doubled light (2) or a black
-/// environment (0) fall outside. Measured on
-/// this machine (lavapipe, 2026-12-02; the test prints them): 0.74 to 1.59 over the shared
-/// scenes and the default scene, lowest on DamagedHelmet (metals: the hybrid frame is 0.80
-/// of the reference there under a constant sky too, and the denoiser clamps some of the
-/// sun's rare glossy highlights: 0.76 with it off), highest on LightsPunctualLamp (lights
-/// inside a glass shade; README, known gaps).
-const FACTOR: f64 = 1.6;
+/// environment (0) fall outside. Measured on this machine (lavapipe, 2026-12-02; the test
+/// prints them): 0.69 to 1.16 over the shared scenes and the default scene, lowest on
+/// LightsPunctualLamp (a bulb inside a thin glass shade: the hybrid frame leaves out what the
+/// shade's inner side reflects; README, known gaps) and DamagedHelmet (0.74: metals, the
+/// hybrid frame is 0.80 of the reference there under a constant sky too, and the denoiser
+/// clamps some of the sun's rare glossy highlights: 0.76 with it off). Before shadow rays
+/// crossed thin glass the lamp measured 1.59.
+const FACTOR: f64 = 1.5;
 /// Mean surface luminance below which a picture counts as black.
 const BLACK: f64 = 0.01;
 

@@ -231,7 +231,7 @@ bool bvh_test_triangle(inout BvhState s, float tmin, inout float closest, inout 
 }
 
 Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
-    hit_shadow_query = first_hit;
+    hit_begin_query(dir, first_hit);
     BvhRay world = bvh_ray(origin, dir);
     Hit best;
     best.instance = NO_HIT;

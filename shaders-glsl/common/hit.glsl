@@ -14,21 +14,85 @@ uvec3 hit_triangle(uint instance, uint primitive) {
 
 vec3 barycentric_weights(vec2 bary) { return vec3(1.0 - bary.x - bary.y, bary.x, bary.y); }
 
-// Set by the trace functions for the ray being traced: true for shadow and visibility queries
-// (any hit ends them), false for closest hits.
+// Both texture coordinate sets at a point of a triangle.
+void hit_uvs(uvec3 tri, vec2 bary, out vec2 uv0, out vec2 uv1) {
+    vec3 w = barycentric_weights(bary);
+    uv0 = w.x * vertices[tri.x].uv0 + w.y * vertices[tri.y].uv0 + w.z * vertices[tri.z].uv0;
+    uv1 = w.x * vertices[tri.x].uv1 + w.y * vertices[tri.y].uv1 + w.z * vertices[tri.z].uv1;
+}
+
+// Set by the trace functions for the ray being traced (hit_begin_query): true for shadow and
+// visibility queries (any hit ends them), false for closest hits; a shadow query's direction;
+// and the light that passes the see-through surfaces it has crossed so far.
 bool hit_shadow_query = false;
+vec3 hit_query_dir = vec3(0.0, 0.0, 1.0);
+vec3 hit_transmittance = vec3(1.0);
+
+void hit_begin_query(vec3 dir, bool shadow) {
+    hit_shadow_query = shadow;
+    hit_query_dir = dir;
+    hit_transmittance = vec3(1.0);
+}
+
+// Thin-walled transmissive surfaces (KHR_materials_transmission without a volume) let light
+// through without bending it when they are smooth, so a shadow ray may cross them: each passes
+// (1 - metallic) T baseColor (1 - F), with F at the angle between the ray and the face normal.
+// A rough one spreads the light it lets through; the real-time passes let shadow rays cross it
+// all the same (its transmitted energy, not its blur), while the reference, which must be
+// exact, stops them there and reaches lights through it by sampling the transmitted lobe
+// (pathtrace.comp defines HIT_SHADOWS_CROSS_SMOOTH_GLASS_ONLY).
+// The smooth case: GGX's alpha at its floor (brdf.glsl MIN_ALPHA 1e-3), a lobe far narrower
+// than a pixel.
+#define HIT_SMOOTH_ROUGHNESS 0.0316
+
+// What one see-through surface lets pass straight along a shadow ray: the uncovered share of a
+// blended surface, and what thin-walled glass transmits through the rest (0 for other
+// materials).
+vec3 hit_see_through(uint instance, uint primitive, vec2 bary) {
+    uint material = instances[instance].material;
+    MaterialInfo m = materials[material];
+    uvec3 tri = hit_triangle(instance, primitive);
+    vec2 uv0, uv1;
+    hit_uvs(tri, bary, uv0, uv1);
+    vec4 bc = material_texel(m, TEX_BASE_COLOR, uv0, uv1);
+    float alpha = m.base_color_factor.a * bc.a;
+    float cover = (m.flags & MATERIAL_BLEND) != 0u ? alpha : (m.alpha_cutoff < 0.0 || alpha >= m.alpha_cutoff ? 1.0 : 0.0);
+    vec3 glass = vec3(0.0);
+    if (m.transmission > 0.0 && m.thickness <= 0.0 && cover > 0.0) {
+        vec4 mr = material_texel(m, TEX_METAL_ROUGH, uv0, uv1);
+        float roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
+#ifdef HIT_SHADOWS_CROSS_SMOOTH_GLASS_ONLY
+        if (roughness > HIT_SMOOTH_ROUGHNESS) return vec3(1.0 - cover);
+#endif
+        float metallic = clamp(m.metallic * mr.b, 0.0, 1.0);
+        float transmission = m.transmission * material_texel(m, TEX_TRANSMISSION, uv0, uv1).r;
+        mat3 to_world = mat3(instances[instance].object_to_world);
+        vec3 e1 = to_world * (vertices[tri.y].position - vertices[tri.x].position);
+        vec3 e2 = to_world * (vertices[tri.z].position - vertices[tri.x].position);
+        float cos_theta = abs(dot(normalize(cross(e1, e2)), normalize(hit_query_dir)));
+        float r = (m.ior - 1.0) / (m.ior + 1.0);
+        float f = r * r + (1.0 - r * r) * pow(1.0 - cos_theta, 5.0);
+        vec3 base = m.base_color_factor.rgb * srgb_to_linear(bc.rgb);
+        glass = (1.0 - metallic) * transmission * (1.0 - f) * base;
+    }
+    return vec3(1.0 - cover) + cover * glass;
+}
 
 // True when the candidate hit should count: the material is opaque, or its alpha passes (for
-// blended materials, the least alpha drawn; for shadow queries, BLEND_SHADOW_CUTOFF).
+// blended materials, the least alpha drawn). A shadow query counts a see-through surface only
+// once nothing passes any more; until then it multiplies what passes into hit_transmittance.
 bool hit_alpha_accept(uint instance, uint primitive, vec2 bary) {
     uint material = instances[instance].material;
-    float cutoff = materials[material].alpha_cutoff;
+    MaterialInfo m = materials[material];
+    if (hit_shadow_query && ((m.flags & MATERIAL_BLEND) != 0u || (m.transmission > 0.0 && m.thickness <= 0.0))) {
+        hit_transmittance *= hit_see_through(instance, primitive, bary);
+        return max(hit_transmittance.x, max(hit_transmittance.y, hit_transmittance.z)) <= 0.0;
+    }
+    float cutoff = m.alpha_cutoff;
     if (cutoff < 0.0) return true;
-    if (hit_shadow_query && (materials[material].flags & MATERIAL_BLEND) != 0u) cutoff = BLEND_SHADOW_CUTOFF;
     uvec3 tri = hit_triangle(instance, primitive);
-    vec3 w = barycentric_weights(bary);
-    vec2 uv0 = w.x * vertices[tri.x].uv0 + w.y * vertices[tri.y].uv0 + w.z * vertices[tri.z].uv0;
-    vec2 uv1 = w.x * vertices[tri.x].uv1 + w.y * vertices[tri.y].uv1 + w.z * vertices[tri.z].uv1;
+    vec2 uv0, uv1;
+    hit_uvs(tri, bary, uv0, uv1);
     return material_alpha(material, uv0, uv1) >= cutoff;
 }
 

@@ -75,7 +75,7 @@ SurfaceMaterial read_material(uint material_id, vec2 uv0, vec2 uv1) {
     } else {
         s.normal_ts = vec3(0.0, 0.0, 1.0);
     }
-    s.transmission = m.transmission;
+    s.transmission = m.transmission * material_texel(m, TEX_TRANSMISSION, uv0, uv1).r;
     s.ior = m.ior;
     s.thin_walled = m.thickness <= 0.0;
     s.absorption = volume_absorption(m);

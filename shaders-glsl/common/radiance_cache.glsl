@@ -219,7 +219,11 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
     vec3 throughput = vec3(1.0);
     for (uint vertex = 0u; vertex < vertices; ++vertex) {
         // The G-buffer carries no IOR: the hybrid frame's paths use glTF's F0 throughout.
-        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, GLTF_DIELECTRIC_F0);
+        // Glass reflects only the light it does not let through: its diffuse lobe shrinks by
+        // the transmitted share (exactly so for a dielectric; a transmissive metal's F0 tint
+        // shrinks with it). What it lets through is not followed on these paths.
+        vec3 base = s.mat.base_color.rgb * (1.0 - s.mat.transmission);
+        BrdfInput m = BrdfInput(base, s.mat.metallic, s.mat.roughness, GLTF_DIELECTRIC_F0);
         vec3 v = -dir;
         vec3 leave = offset_ray(s.position, s.normal_geo);
         vec3 f;
@@ -247,13 +251,14 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                 d = bs.l;
                 tmax = 1e6;
             }
+            // Light and cell rays cross see-through surfaces, scaled by what passes them.
             Hit h = trace_ray(o, d, 0.0, tmax, RAY_MASK_ALL, ray != RC_RAY_NEXT);
             if (ray == RC_RAY_LIGHT && h.instance == NO_HIT) {
                 // No BRDF-sampled continuation counts emission: the light sample has full weight.
-                radiance += throughput * f * ls.weight;
+                radiance += throughput * f * ls.weight * hit_transmittance;
             } else if (ray == RC_RAY_CELL && h.instance == NO_HIT) {
                 // The BRDF sample's weight estimates the directional albedo that reflects C.
-                radiance += throughput * bs.weight * cached.c;
+                radiance += throughput * bs.weight * cached.c * hit_transmittance;
                 answered = true;
             } else if (ray == RC_RAY_NEXT) {
                 next = h;

@@ -35,13 +35,14 @@ struct InstanceInfo {
 #define TEX_NORMAL 2
 #define TEX_OCCLUSION 3
 #define TEX_EMISSIVE 4
+#define TEX_TRANSMISSION 5  // KHR_materials_transmission: red channel
+#define TEX_SLOTS 6
 
 #define MATERIAL_DOUBLE_SIDED 1u
 // alphaMode BLEND: the surface covers the share alpha of each point, the rest passes straight
-// through. alpha_cutoff is then the least alpha still drawn; shadow rays treat the surface as
-// masked at BLEND_SHADOW_CUTOFF.
+// through (shadow rays included: common/hit.glsl). alpha_cutoff is then the least alpha still
+// drawn.
 #define MATERIAL_BLEND 2u
-#define BLEND_SHADOW_CUTOFF 0.5
 
 struct MaterialInfo {
     vec4 base_color_factor;
@@ -51,7 +52,7 @@ struct MaterialInfo {
     float roughness;
     float normal_scale;
     float occlusion_strength;
-    int tex[5];         // texture index per slot, -1 when absent
+    int tex[TEX_SLOTS]; // texture index per slot, -1 when absent
     uint uv_sets;       // bit i set: slot i reads TEXCOORD_1
     uint flags;
     float transmission; // KHR_materials_transmission (0: opaque)
@@ -59,7 +60,7 @@ struct MaterialInfo {
     float thickness;    // KHR_materials_volume: 0 thin-walled, else the mesh bounds a volume
     float attenuation_distance;  // +inf: no absorption
     vec3 attenuation_color;
-    vec4 uv_xform[10];  // per slot two rows of the 2x3 KHR_texture_transform matrix
+    vec4 uv_xform[2 * TEX_SLOTS];  // per slot two rows of the 2x3 KHR_texture_transform matrix
 };
 
 #define LIGHT_DIRECTIONAL 0u

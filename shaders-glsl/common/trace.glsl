@@ -5,6 +5,8 @@
 // index in the mesh's index buffer, t along the (unnormalised) direction, barycentrics of
 // vertices 1 and 2, and whether the triangle was seen counter-clockwise (front face).
 // Candidates on alpha-masked instances pass through hit_alpha_accept (hit.glsl).
+// trace_transmittance is a shadow ray that crosses see-through surfaces (blended ones, thin-walled
+// glass) and returns the light that passes them: 0 where an opaque surface blocks it.
 // trace_ray(..., first_hit) is both in one: with first_hit, any hit ends the ray (its t and
 // barycentrics are then of whichever hit that was). Every call of a trace function inlines a
 // whole traversal when lavapipe compiles the shader, so a shader that traces several kinds of
@@ -43,7 +45,7 @@ layout(set = 0, binding = 8) uniform accelerationStructureEXT scene_tlas;
     }
 
 bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
-    hit_shadow_query = true;
+    hit_begin_query(dir, true);
     rayQueryEXT q;
     rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsTerminateOnFirstHitEXT, mask, origin, tmin, dir, tmax);
     TRACE_RUN(q);
@@ -51,7 +53,7 @@ bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
 }
 
 Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
-    hit_shadow_query = first_hit;
+    hit_begin_query(dir, first_hit);
     rayQueryEXT q;
     uint flags = first_hit ? gl_RayFlagsTerminateOnFirstHitEXT : gl_RayFlagsNoneEXT;
     rayQueryInitializeEXT(q, scene_tlas, flags, mask, origin, tmin, dir, tmax);
@@ -80,5 +82,9 @@ Hit trace_closest(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
 #else
 #error "compile with RT_RAY_QUERY or RT_COMPUTE_BVH"
 #endif
+
+vec3 trace_transmittance(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
+    return trace_any(origin, dir, tmin, tmax, mask) ? vec3(0.0) : hit_transmittance;
+}
 
 #endif

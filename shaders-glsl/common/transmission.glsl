@@ -96,6 +96,31 @@ TransmissionSample transmission_sample(BrdfInput m, bool thin_walled, float ior,
     return s;
 }
 
+// Thin-walled transmission toward l, on the far side of the surface from v: the transmitted lobe
+// is the specular lobe mirrored through the surface plane (transmission_sample), so its value
+// and density are the specular lobe's at l's mirror image, with 1 - F for F and tinted by
+// baseColor. For light samples through rough thin-walled glass. f cos, before the share
+// transmission (1 - metallic) that the caller applies.
+vec3 thin_transmission_eval_cos(BrdfInput m, vec3 n, vec3 v, vec3 l) {
+    vec3 mirrored = l - 2.0 * dot(n, l) * n;
+    float n_dot_l = dot(n, mirrored);
+    float n_dot_v = dot(n, v);
+    if (n_dot_l <= 0.0 || n_dot_v <= 0.0) return vec3(0.0);
+    vec3 h = normalize(v + mirrored);
+    float alpha = ggx_alpha(m.roughness);
+    float f = fresnel_dielectric(m, dot(v, h));
+    return (1.0 - f) * m.base_color * ggx_d(max(dot(n, h), 0.0), alpha) * smith_visibility(n_dot_l, n_dot_v, alpha) *
+           n_dot_l;
+}
+
+// Solid-angle density of transmission_sample producing l on a thin-walled surface.
+float thin_transmission_pdf(BrdfInput m, vec3 n, vec3 v, vec3 l) {
+    vec3 mirrored = l - 2.0 * dot(n, l) * n;
+    float n_dot_v = dot(n, v);
+    if (dot(n, mirrored) <= 0.0 || n_dot_v <= 0.0) return 0.0;
+    return ggx_vndf_pdf(n_dot_v, max(dot(n, normalize(v + mirrored)), 0.0), ggx_alpha(m.roughness));
+}
+
 // The bare interface seen from inside a volume: reflect with probability F (total internal
 // reflection included), else leave it. n faces the inside (the ray's side).
 TransmissionSample interface_sample(float roughness, float ior, vec3 n, vec3 v, vec3 u) {

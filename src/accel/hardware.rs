@@ -61,7 +61,7 @@ impl HardwareAccel {
                 index_address: geo.indices.address,
                 index_offset: first_index * 4,
                 triangle_count: mesh.triangle_count() as u32,
-                opaque: scene.materials[mesh.material as usize].alpha_mode.cutoff().is_none(),
+                opaque: !scene.materials[mesh.material as usize].rays_test_candidates(),
             })
             .collect();
         // Static meshes are built once for fast tracing and compacted; deforming ones are

@@ -14,6 +14,7 @@ pub const NORMAL_GEO: Output = Output::new(NAME, "normal_geo");
 /// The shading normal (normal-mapped).
 pub const NORMAL: Output = Output::new(NAME, "normal");
 pub const BASE_COLOR: Output = Output::new(NAME, "base_color");
+/// Metallic, roughness, occlusion and transmission (KHR_materials_transmission).
 pub const METAL_ROUGH: Output = Output::new(NAME, "metal_rough");
 pub const EMISSIVE: Output = Output::new(NAME, "emissive");
 /// Camera and object motion, pixels.

@@ -128,6 +128,8 @@ pub struct Material {
     /// KHR_materials_transmission: the share of the dielectric's diffuse light that passes
     /// through the surface instead (0 = opaque).
     pub transmission: f32,
+    /// Its texture: transmission scales by the red channel.
+    pub transmission_texture: Option<TextureRef>,
     /// KHR_materials_ior: index of refraction of the dielectric (1.5 gives glTF's F0 of 0.04).
     pub ior: f32,
     /// KHR_materials_volume: 0 means thin-walled (light passes straight through the surface);
@@ -157,6 +159,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             transmission: 0.0,
+            transmission_texture: None,
             ior: 1.5,
             thickness: 0.0,
             attenuation_color: Vec3::ONE,
@@ -175,6 +178,13 @@ impl Material {
     /// metallic texture makes the surface a metal, none does).
     pub fn is_transmissive(&self) -> bool {
         self.transmission > 0.0
+    }
+
+    /// True when rays must look at each triangle they cross before counting it as a hit (a
+    /// non-opaque instance, in both ray backends): the alpha test, and shadow rays' passage
+    /// through blended and thin-walled transmissive surfaces (common/hit.glsl).
+    pub fn rays_test_candidates(&self) -> bool {
+        self.alpha_mode.cutoff().is_some() || (self.is_transmissive() && self.thickness <= 0.0)
     }
 }
 

@@ -75,6 +75,9 @@ pub const MATERIAL_BLEND: u32 = 2;
 /// The least alpha a blended surface is drawn with: texels below it are holes.
 pub const BLEND_VISIBLE_ALPHA: f32 = 1.0 / 256.0;
 
+/// Texture slots per material (common/scene.glsl TEX_*).
+pub const TEXTURE_SLOTS: usize = 6;
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -85,7 +88,7 @@ pub struct GpuMaterial {
     pub roughness: f32,
     pub normal_scale: f32,
     pub occlusion_strength: f32,
-    pub tex: [i32; 5],
+    pub tex: [i32; TEXTURE_SLOTS],
     pub uv_sets: u32,
     pub flags: u32,
     pub transmission: f32,
@@ -93,7 +96,7 @@ pub struct GpuMaterial {
     pub thickness: f32,
     pub attenuation_distance: f32,
     pub attenuation_color: [f32; 3],
-    pub uv_xform: [[f32; 4]; 10],
+    pub uv_xform: [[f32; 4]; 2 * TEXTURE_SLOTS],
 }
 
 pub const LIGHT_DIRECTIONAL: u32 = 0;
@@ -417,11 +420,18 @@ fn scene_bindings(texture_count: u32) -> Vec<Binding> {
 }
 
 fn gpu_material(m: &scene::Material) -> GpuMaterial {
-    let slots =
-        [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.occlusion_texture, m.emissive_texture];
-    let mut tex = [-1i32; 5];
+    // In the order of common/scene.glsl's TEX_* slots.
+    let slots: [Option<scene::TextureRef>; TEXTURE_SLOTS] = [
+        m.base_color_texture,
+        m.metallic_roughness_texture,
+        m.normal_texture,
+        m.occlusion_texture,
+        m.emissive_texture,
+        m.transmission_texture,
+    ];
+    let mut tex = [-1i32; TEXTURE_SLOTS];
     let mut uv_sets = 0u32;
-    let mut uv_xform = [[0.0f32; 4]; 10];
+    let mut uv_xform = [[0.0f32; 4]; 2 * TEXTURE_SLOTS];
     for (i, slot) in slots.iter().enumerate() {
         let xf = slot.map(|s| s.transform).unwrap_or(glam::Mat3::IDENTITY);
         // Rows of the 2x3 affine part: uv' = (row0 . (u, v, 1), row1 . (u, v, 1)).

@@ -268,6 +268,8 @@ pub struct InstanceDesc {
     pub mesh: u32,
     pub custom_index: u32,
     pub mask: u8,
+    /// Its candidate hits go through the shaders' hit_alpha_accept (common/hit.glsl): the alpha
+    /// test, and shadow rays' passage through see-through surfaces.
     pub alpha_tested: bool,
     pub material: u32,
 }

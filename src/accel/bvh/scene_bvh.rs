@@ -37,7 +37,7 @@ pub fn instance_descs(scene: &Scene, pose: &Pose) -> Vec<InstanceDesc> {
         .enumerate()
         .map(|(i, inst)| {
             let material = scene.meshes[inst.mesh as usize].material;
-            let alpha_tested = scene.materials.get(material as usize).is_some_and(|m| m.alpha_mode.cutoff().is_some());
+            let alpha_tested = scene.materials.get(material as usize).is_some_and(|m| m.rays_test_candidates());
             InstanceDesc {
                 object_to_world: Affine3A::from_mat4(pose.world[inst.node as usize]),
                 mesh: inst.mesh,

@@ -1215,14 +1215,17 @@ fn unsupported_extensions_in_use_are_named_once() {
 fn transmission_ior_and_volume_load_and_bad_values_fall_back() {
     let mut g = Gltf::triangle();
     g.json["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"]);
+    let png = g.view(&png_2x2([255, 0, 0, 255]));
+    g.json["images"] = json!([{"bufferView": png, "mimeType": "image/png"}]);
+    g.json["textures"] = json!([{"source": 0}]);
     g.json["materials"] = json!([
         {"extensions": {
-            "KHR_materials_transmission": {"transmissionFactor": 0.75},
+            "KHR_materials_transmission": {"transmissionFactor": 0.75, "transmissionTexture": {"index": 0, "texCoord": 1}},
             "KHR_materials_ior": {"ior": 1.33},
             "KHR_materials_volume": {"thicknessFactor": 0.2, "attenuationDistance": 2.0, "attenuationColor": [1.0, 0.5, 0.25]},
         }},
         {"extensions": {
-            "KHR_materials_transmission": {"transmissionFactor": 3.0, "transmissionTexture": {"index": 0}},
+            "KHR_materials_transmission": {"transmissionFactor": 3.0, "transmissionTexture": {"index": 7}},
             "KHR_materials_ior": {"ior": 0.5},
             "KHR_materials_volume": {"thicknessFactor": -1.0, "attenuationDistance": 0.0},
         }},
@@ -1234,13 +1237,16 @@ fn transmission_ior_and_volume_load_and_bad_values_fall_back() {
     assert_eq!((m.transmission, m.ior, m.thickness, m.attenuation_distance), (0.75, 1.33, 0.2, 2.0));
     assert_eq!(m.attenuation_color, Vec3::new(1.0, 0.5, 0.25));
     assert!(m.is_transmissive());
+    let texture = m.transmission_texture.expect("transmissionTexture is read");
+    assert_eq!((texture.texture, texture.uv_set), (0, 1));
     let bad = &scene.materials[1];
     assert_eq!((bad.transmission, bad.ior, bad.thickness, bad.attenuation_distance), (0.0, 1.5, 0.0, f32::INFINITY));
     assert_warning(
         &scene,
         "materials[1].extensions.KHR_materials_transmission.transmissionFactor: 3 is outside [0, 1]",
     );
-    assert_warning(&scene, "transmissionTexture is not supported");
+    assert_eq!(bad.transmission_texture, None);
+    assert_warning(&scene, "materials[1].extensions.KHR_materials_transmission.transmissionTexture.index");
     assert_warning(&scene, "materials[1].extensions.KHR_materials_ior.ior: 0.5 is below 1");
     assert_warning(&scene, "KHR_materials_volume.thicknessFactor: -1 is negative");
     assert_warning(&scene, "KHR_materials_volume.attenuationDistance: 0 is not positive");
