@@ -56,7 +56,7 @@ vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
 // it, as the reference traces it (common/transmission.glsl), shaded where it leaves the glass,
 // and for thin-walled glass a light sample through it.
 // Inside a volume the interface reflects or lets the path out (Beer-Lambert absorbing on the
-// way); a further transmissive surface is passed through, its reflection left out. The weight
+// way); a further transmissive surface adds what it reflects and is passed through. The weight
 // excludes the surface's transmitted share, which the caller applies.
 #define TRANSMISSION_EVENTS 8u
 // Up to this many punctual lights, each is sampled through thin-walled glass.
@@ -94,11 +94,19 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         MaterialInfo hm = materials[s.material];
         float through = s.mat.transmission * (1.0 - s.mat.metallic);
-        if (through <= 0.0) return emitted + weight * shade_hit(h, dir, rng);
-        if (emitter_visible_side(h.instance, h.primitive, dir)) emitted += weight * s.mat.emissive;
+        // What the surface sends back along the path: all it reflects, glass included (the
+        // light glass does not let through; the path goes on with what it does). A volume's
+        // inner side reflects by the interface sample below instead.
+        bool inner_side = hm.thickness > 0.0 && !s.front;
+        if (through <= 0.0 || !inner_side) {
+            emitted += weight * shade_hit(h, dir, rng);
+        } else if (emitter_visible_side(h.instance, h.primitive, dir)) {
+            emitted += weight * s.mat.emissive;
+        }
+        if (through <= 0.0) return emitted;
         BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
         TransmissionSample next;
-        if (hm.thickness > 0.0 && !s.front) {
+        if (inner_side) {
             next = interface_sample(s.mat.roughness, hm.ior, s.normal, -dir, rng_next3(rng));
             if (next.crossed) absorption = vec3(0.0);
         } else {

@@ -209,8 +209,10 @@ void bvh_leaf(inout BvhState s, vec3 origin, vec3 dir, uint mask, uint blas_base
 }
 
 // Tests the triangle at s.tri_next and moves past it; records an accepted hit in best (with its
-// instance record's row) and returns true.
-bool bvh_test_triangle(inout BvhState s, float tmin, inout float closest, inout Hit best, inout uint best_instance) {
+// instance record's row) and returns true. `alpha`: whether this call site tests candidates on
+// alpha-tested instances (a constant: a site without them compiles without the test).
+bool bvh_test_triangle(inout BvhState s, float tmin, inout float closest, inout Hit best, inout uint best_instance,
+                       bool first_hit, bool alpha) {
     vec2 bary;
     bool front;
     uint row = s.tri_next;
@@ -220,7 +222,7 @@ bool bvh_test_triangle(inout BvhState s, float tmin, inout float closest, inout 
     if (t < 0.0) return false;
     // Only now the primitive index: most tests miss, and every word loaded costs.
     uint prim = bvh_rows[row].w;
-    if (s.inst_alpha && !hit_alpha_accept(bvh_rows[s.inst_row + 3u].z, prim, bary)) return false;
+    if (alpha && s.inst_alpha && !hit_alpha_accept(bvh_rows[s.inst_row + 3u].z, prim, bary, first_hit)) return false;
     closest = t;
     best_instance = s.inst_row;
     best.primitive = prim;
@@ -231,7 +233,7 @@ bool bvh_test_triangle(inout BvhState s, float tmin, inout float closest, inout 
 }
 
 Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
-    hit_begin_query(dir, first_hit);
+    hit_begin_query(dir);
     BvhRay world = bvh_ray(origin, dir);
     Hit best;
     best.instance = NO_HIT;
@@ -252,9 +254,13 @@ Hit bvh_trace(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool fir
         if (s.cur < (1u << BVH_KIND_SHIFT)) bvh_visit_record(s, bvh_rows[5], bvh_rows[6], tmin, closest);
     }
     while (true) {
-        // Up to two triangles per iteration: leaves hold about two (a quad is two triangles).
-        if (s.tri_next < s.tri_end && bvh_test_triangle(s, tmin, closest, best, best_instance) && first_hit) break;
-        if (s.tri_next < s.tri_end && bvh_test_triangle(s, tmin, closest, best, best_instance) && first_hit) break;
+        // Up to two triangles per iteration: leaves hold about two (a quad is two triangles). The
+        // second test leaves alpha-tested instances to the next iteration, so that each traversal
+        // inlines the alpha test once.
+        if (s.tri_next < s.tri_end && bvh_test_triangle(s, tmin, closest, best, best_instance, first_hit, true) &&
+            first_hit) break;
+        if (s.tri_next < s.tri_end && !s.inst_alpha &&
+            bvh_test_triangle(s, tmin, closest, best, best_instance, first_hit, false) && first_hit) break;
         if (s.tri_next < s.tri_end) continue;
         if (s.cur == BVH_NONE) {
             // Pop, dropping entries the closest hit has passed; leave the instance once only

@@ -21,15 +21,12 @@ void hit_uvs(uvec3 tri, vec2 bary, out vec2 uv0, out vec2 uv1) {
     uv1 = w.x * vertices[tri.x].uv1 + w.y * vertices[tri.y].uv1 + w.z * vertices[tri.z].uv1;
 }
 
-// Set by the trace functions for the ray being traced (hit_begin_query): true for shadow and
-// visibility queries (any hit ends them), false for closest hits; a shadow query's direction;
-// and the light that passes the see-through surfaces it has crossed so far.
-bool hit_shadow_query = false;
+// Set by the trace functions for the ray being traced (hit_begin_query): its direction, and for
+// a shadow query the light that passes the see-through surfaces it has crossed so far.
 vec3 hit_query_dir = vec3(0.0, 0.0, 1.0);
 vec3 hit_transmittance = vec3(1.0);
 
-void hit_begin_query(vec3 dir, bool shadow) {
-    hit_shadow_query = shadow;
+void hit_begin_query(vec3 dir) {
     hit_query_dir = dir;
     hit_transmittance = vec3(1.0);
 }
@@ -79,12 +76,15 @@ vec3 hit_see_through(uint instance, uint primitive, vec2 bary) {
 }
 
 // True when the candidate hit should count: the material is opaque, or its alpha passes (for
-// blended materials, the least alpha drawn). A shadow query counts a see-through surface only
-// once nothing passes any more; until then it multiplies what passes into hit_transmittance.
-bool hit_alpha_accept(uint instance, uint primitive, vec2 bary) {
+// blended materials, the least alpha drawn). A shadow query (`shadow`: any hit ends the ray)
+// counts a see-through surface only once nothing passes any more; until then it multiplies
+// what passes into hit_transmittance. The trace functions pass `shadow` as a constant where they
+// can, so that closest-hit traversals compile without the see-through code: lavapipe inlines
+// this function into every traversal, and each copy lengthens its compile.
+bool hit_alpha_accept(uint instance, uint primitive, vec2 bary, bool shadow) {
     uint material = instances[instance].material;
     MaterialInfo m = materials[material];
-    if (hit_shadow_query && ((m.flags & MATERIAL_BLEND) != 0u || (m.transmission > 0.0 && m.thickness <= 0.0))) {
+    if (shadow && ((m.flags & MATERIAL_BLEND) != 0u || (m.transmission > 0.0 && m.thickness <= 0.0))) {
         hit_transmittance *= hit_see_through(instance, primitive, bary);
         return max(hit_transmittance.x, max(hit_transmittance.y, hit_transmittance.z)) <= 0.0;
     }

@@ -32,32 +32,33 @@ struct Hit {
 #extension GL_EXT_ray_query : require
 layout(set = 0, binding = 8) uniform accelerationStructureEXT scene_tlas;
 
-// Runs a query to completion, confirming alpha-masked candidates that pass the alpha test.
-// (A macro: GLSL cannot pass a rayQueryEXT to a function as inout.)
-#define TRACE_RUN(q)                                                                              \
+// Runs a query to completion, confirming alpha-masked candidates that pass the alpha test
+// (`shadow`: as a shadow query, hit_alpha_accept). (A macro: GLSL cannot pass a rayQueryEXT to
+// a function as inout.)
+#define TRACE_RUN(q, shadow)                                                                      \
     while (rayQueryProceedEXT(q)) {                                                               \
         if (rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT) { \
             uint cand_inst = rayQueryGetIntersectionInstanceCustomIndexEXT(q, false);             \
             uint cand_prim = rayQueryGetIntersectionPrimitiveIndexEXT(q, false);                  \
             vec2 cand_bary = rayQueryGetIntersectionBarycentricsEXT(q, false);                    \
-            if (hit_alpha_accept(cand_inst, cand_prim, cand_bary)) rayQueryConfirmIntersectionEXT(q); \
+            if (hit_alpha_accept(cand_inst, cand_prim, cand_bary, shadow)) rayQueryConfirmIntersectionEXT(q); \
         }                                                                                         \
     }
 
 bool trace_any(vec3 origin, vec3 dir, float tmin, float tmax, uint mask) {
-    hit_begin_query(dir, true);
+    hit_begin_query(dir);
     rayQueryEXT q;
     rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsTerminateOnFirstHitEXT, mask, origin, tmin, dir, tmax);
-    TRACE_RUN(q);
+    TRACE_RUN(q, true);
     return rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
 }
 
 Hit trace_ray(vec3 origin, vec3 dir, float tmin, float tmax, uint mask, bool first_hit) {
-    hit_begin_query(dir, first_hit);
+    hit_begin_query(dir);
     rayQueryEXT q;
     uint flags = first_hit ? gl_RayFlagsTerminateOnFirstHitEXT : gl_RayFlagsNoneEXT;
     rayQueryInitializeEXT(q, scene_tlas, flags, mask, origin, tmin, dir, tmax);
-    TRACE_RUN(q);
+    TRACE_RUN(q, first_hit);
     Hit h;
     if (rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionTriangleEXT) {
         h.instance = NO_HIT;

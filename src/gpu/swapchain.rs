@@ -335,7 +335,8 @@ impl Swapchain {
             let presented = unsafe { self.loader.queue_present(ctx.queue, &present) };
             // Wait even when presenting failed: the submission itself went ahead.
             // SAFETY: the fence belongs to this device and was submitted above.
-            unsafe { d.wait_for_fences(&[self.fence], true, 600_000_000_000) }.context("wait for the frame")?;
+            unsafe { d.wait_for_fences(&[self.fence], true, super::commands::FENCE_TIMEOUT_NS) }
+                .context("wait for the frame")?;
             pending = false;
             match presented {
                 Ok(suboptimal) => self.stale |= suboptimal,
