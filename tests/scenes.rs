@@ -31,7 +31,7 @@ const REFERENCE_SPP: u32 = 8;
 /// either way. It denoises one sample per pixel, so it is not the reference, but a missing
 /// sun (71% of the default light on a horizontal surface), a doubled light (2) or a black
 /// environment (0) fall outside. Measured on this machine (lavapipe, 2026-12-02; the test
-/// prints them): 0.69 to 1.16 over the shared scenes and the default scene, lowest on
+/// prints them): 0.70 to 1.16 over the shared scenes and the default scene, lowest on
 /// LightsPunctualLamp (a bulb inside a thin glass shade: the hybrid frame leaves out what the
 /// shade's inner side reflects; README, known gaps) and DamagedHelmet (0.74: metals, the
 /// hybrid frame is 0.80 of the reference there under a constant sky too, and the denoiser
