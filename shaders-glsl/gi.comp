@@ -30,9 +30,9 @@
 //
 // At half rate (`params.half_rate`, never with resampled lights, whose reservoirs every pixel
 // must carry) the pixels of a checkerboard that alternates every frame are traced, and each of
-// the others takes the mean of its traced neighbours that show the same surface; a pixel
-// without one (an edge, a thin object) is traced as well. The denoiser's temporal stage then
-// sees every pixel's own samples every other frame.
+// the others is marked for gi_fill, which gives it the mean of its traced neighbours that show
+// the same surface; a pixel without one (an edge, a thin object) is traced as well. The
+// denoiser's temporal stage then sees every pixel's own samples every other frame.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "common/trace.glsl"
@@ -41,6 +41,7 @@
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 #include "common/light_reservoir.glsl"
+#include "common/gi_fill.glsl"
 #define RC_BINDING 14
 #include "common/radiance_cache.glsl"
 
@@ -84,26 +85,26 @@ LightReservoir previous_reservoir(ivec2 px, uint id, float z, vec3 ng, ShadingPo
     return reservoir_unpack(imageLoad(prev_reservoir, q), sp);
 }
 
-// What shade() estimated at a pixel, for its neighbours at half rate.
-struct Estimate {
-    vec3 diffuse;   // (1/pi) int L w cos, whether or not the pixel keeps it (a rough metal does not)
-    vec3 specular;  // gi.specular as written
-    bool gathered;  // false: nothing estimated (no surface, or neither a diffuse nor a rough lobe)
-};
+// The lobes gi gathers at pixel `px`: a diffuse one (some albedo left by the metalness) and a
+// specular one (rougher than the reflection cut-off).
+bool has_diffuse(ivec2 px) {
+    vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - imageLoad(g_metal_rough, px).x);
+    return max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
+}
+bool has_rough(ivec2 px) { return imageLoad(g_metal_rough, px).y > params.roughness_cutoff; }
 
 // Traces pixel `px`'s samples and writes its outputs.
-Estimate shade(ivec2 px) {
-    vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - imageLoad(g_metal_rough, px).x);
+void shade(ivec2 px) {
     vec4 mr = imageLoad(g_metal_rough, px);
-    bool rough = mr.y > params.roughness_cutoff;
-    bool diffuse = max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
+    bool rough = has_rough(px);
+    bool diffuse = has_diffuse(px);
     bool resampled = resampled_lights_present();
     uint id = imageLoad(g_ids, px).x;
     if (id == NO_INSTANCE || !(diffuse || rough || resampled)) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
         if (resampled) imageStore(out_reservoir, px, reservoir_pack(reservoir_empty()));
-        return Estimate(vec3(0.0), vec3(0.0), false);
+        return;
     }
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
@@ -209,92 +210,59 @@ Estimate shade(ivec2 px) {
     }
     imageStore(out_radiance, px, vec4(diffuse ? l_sum : vec3(0.0), 1.0));
     imageStore(out_specular, px, vec4(spec_sum, 1.0));
-    return Estimate(l_sum, spec_sum, true);
 }
 
-// At half rate, what each invocation traced: its estimate, whether its surface is rough, and
-// the surface (instance, shading normal, view depth; depth < 0: nothing traced) for the
-// fill's test.
-shared vec3 s_diffuse[8][8];
-shared vec3 s_specular[8][8];
-shared bool s_rough[8][8];
-shared uint s_instance[8][8];
-shared vec4 s_surface[8][8];
-
-// Fills pixel `px` (the untraced one of invocation `l`'s pair) with the mean of its traced
-// neighbours (left, right, above, below) that show the same surface: the same instance (two
-// floors either side of a wall seen edge-on meet on screen at one depth and normal), shading
-// normals within 25 degrees, and each point within 1% of the depth of the other's tangent
-// plane. False where none does, or where the pixel needs no fill (no surface, or no lobe to
-// gather: shade() writes its zeros).
-bool fill_from_neighbours(ivec2 px, ivec2 l, uint parity) {
+// At half rate, what gi_fill needs to fill untraced pixel `px` (common/gi_fill.glsl): its traced
+// neighbours that show the same surface, and its lobes. A neighbour shows it when it is the
+// same instance (two floors either side of a wall seen edge-on meet on screen at one depth and
+// normal) with the lobes this pixel gathers (its signals are zero for a lobe it lacks), the
+// shading normals are within 25 degrees, and each point lies within 1% of its depth of the
+// other's tangent plane. 0 where none does (the pixel is traced instead) or where the pixel
+// needs no fill (no surface, or no lobe to gather: shade() writes its zeros).
+uint fill_sources(ivec2 px) {
     uint id = imageLoad(g_ids, px).x;
-    vec4 mr = imageLoad(g_metal_rough, px);
-    vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - mr.x);
-    bool diffuse = max(albedo.r, max(albedo.g, albedo.b)) > 0.0;
-    bool rough = mr.y > params.roughness_cutoff;
-    if (id == NO_INSTANCE || !(diffuse || rough)) return false;
+    bool diffuse = has_diffuse(px), rough = has_rough(px);
+    if (id == NO_INSTANCE || !(diffuse || rough)) return 0u;
     float depth = imageLoad(g_depth, px).r;
     vec3 n = imageLoad(g_normal, px).xyz;
     vec3 p = world_position(px, depth);
-    // The traced pixel beside it in its own pair, the one beyond it in the next pair, and the
-    // ones above and below it (whose rows trace the other parity).
-    ivec2 across = parity == 0u ? ivec2(l.x + 1, l.y) : ivec2(l.x - 1, l.y);
-    ivec2 taps[4] = ivec2[4](l, across, ivec2(l.x, l.y - 1), ivec2(l.x, l.y + 1));
-    ivec2 offsets[4] = ivec2[4](ivec2(parity == 0u ? -1 : 1, 0), ivec2(parity == 0u ? 1 : -1, 0),
-                                ivec2(0, -1), ivec2(0, 1));
-    vec3 d_sum = vec3(0.0), s_sum = vec3(0.0);
-    float count = 0.0;
+    uint sources = 0u;
     for (int i = 0; i < 4; ++i) {
-        ivec2 t = taps[i];
-        if (any(lessThan(t, ivec2(0))) || any(greaterThan(t, ivec2(7)))) continue;
-        vec4 surface = s_surface[t.y][t.x];
-        if (surface.w < 0.0 || s_instance[t.y][t.x] != id || (rough && !s_rough[t.y][t.x]) ||
-            dot(n, surface.xyz) < 0.9) {
-            continue;
-        }
-        vec3 q = world_position(px + offsets[i], surface.w);
-        vec3 d = q - p;
-        if (abs(dot(d, n)) > 0.01 * depth || abs(dot(d, surface.xyz)) > 0.01 * surface.w) continue;
-        d_sum += s_diffuse[t.y][t.x];
-        s_sum += s_specular[t.y][t.x];
-        count += 1.0;
+        ivec2 q = px + GI_FILL_OFFSETS[i];
+        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
+        if (imageLoad(g_ids, q).x != id || (diffuse && !has_diffuse(q)) || (rough && !has_rough(q))) continue;
+        vec3 nq = imageLoad(g_normal, q).xyz;
+        float depth_q = imageLoad(g_depth, q).r;
+        vec3 d = world_position(q, depth_q) - p;
+        if (dot(n, nq) < 0.9 || abs(dot(d, n)) > 0.01 * depth || abs(dot(d, nq)) > 0.01 * depth_q) continue;
+        sources |= 1u << i;
     }
-    if (count == 0.0) return false;
-    imageStore(out_radiance, px, vec4(diffuse ? d_sum / count : vec3(0.0), 1.0));
-    imageStore(out_specular, px, vec4(rough ? s_sum / count : vec3(0.0), 1.0));
-    return true;
+    if (sources == 0u) return 0u;
+    return sources | (diffuse ? GI_FILL_DIFFUSE : 0u) | (rough ? GI_FILL_ROUGH : 0u);
 }
 
 // At full rate one invocation per pixel. At half rate one per horizontal pair of pixels: it
-// traces the pixel on this frame's checkerboard, then (after the workgroup's barrier, so that
-// its neighbours' estimates are in shared memory) fills the other or, failing that, traces it
-// too. Both pixels are shaded from one call site in a loop: the compute backend inlines its
-// traversal at every call, and a second copy would lengthen a CPU driver's compile.
+// traces the pixel on this frame's checkerboard, then marks the other for gi_fill or, where
+// that cannot fill it, traces it too. Both pixels are shaded from one call site in a loop: the
+// compute backend inlines its traversal at every call, and a second copy would lengthen a CPU
+// driver's compile.
 void main() {
     bool half_rate = params.half_rate != 0u;
     ivec2 g = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 l = ivec2(gl_LocalInvocationID.xy);
     uint parity = half_rate ? (uint(g.y) + frame.frame_index) & 1u : 0u;
     ivec2 traced = half_rate ? ivec2(2 * g.x + int(parity), g.y) : g;
     ivec2 filled = ivec2(2 * g.x + 1 - int(parity), g.y);
     [[dont_unroll]] for (uint k = 0u; k < (half_rate ? 2u : 1u); ++k) {
         ivec2 px = k == 0u ? traced : filled;
-        bool run = all(lessThan(px, ivec2(frame.size)));
+        if (any(greaterThanEqual(px, ivec2(frame.size)))) continue;
         if (k == 1u) {
-            memoryBarrierShared();
-            barrier();
-            if (run && fill_from_neighbours(px, l, parity)) run = false;
+            uint sources = fill_sources(px);
+            if (sources != 0u) {
+                imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, -float(sources)));
+                imageStore(out_specular, px, vec4(0.0));
+                continue;
+            }
         }
-        Estimate e = Estimate(vec3(0.0), vec3(0.0), false);
-        if (run) e = shade(px);
-        if (k == 0u && half_rate) {
-            s_diffuse[l.y][l.x] = e.diffuse;
-            s_specular[l.y][l.x] = e.specular;
-            s_rough[l.y][l.x] = run && imageLoad(g_metal_rough, px).y > params.roughness_cutoff;
-            s_instance[l.y][l.x] = run ? imageLoad(g_ids, px).x : NO_INSTANCE;
-            s_surface[l.y][l.x] = e.gathered ? vec4(imageLoad(g_normal, px).xyz, imageLoad(g_depth, px).r)
-                                             : vec4(0.0, 0.0, 0.0, -1.0);
-        }
+        shade(px);
     }
 }

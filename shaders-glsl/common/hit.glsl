@@ -55,7 +55,7 @@ vec3 hit_see_through(uint instance, uint primitive, vec2 bary) {
     float alpha = m.base_color_factor.a * bc.a;
     float cover = (m.flags & MATERIAL_BLEND) != 0u ? alpha : (m.alpha_cutoff < 0.0 || alpha >= m.alpha_cutoff ? 1.0 : 0.0);
     vec3 glass = vec3(0.0);
-    if (m.transmission > 0.0 && m.thickness <= 0.0 && cover > 0.0) {
+    if (material_thin_glass(m) && cover > 0.0) {
         vec4 mr = material_texel(m, TEX_METAL_ROUGH, uv0, uv1);
         float roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
 #ifdef HIT_SHADOWS_CROSS_SMOOTH_GLASS_ONLY
@@ -84,7 +84,7 @@ vec3 hit_see_through(uint instance, uint primitive, vec2 bary) {
 bool hit_alpha_accept(uint instance, uint primitive, vec2 bary, bool shadow) {
     uint material = instances[instance].material;
     MaterialInfo m = materials[material];
-    if (shadow && ((m.flags & MATERIAL_BLEND) != 0u || (m.transmission > 0.0 && m.thickness <= 0.0))) {
+    if (shadow && ((m.flags & MATERIAL_BLEND) != 0u || material_thin_glass(m))) {
         hit_transmittance *= hit_see_through(instance, primitive, bary);
         return max(hit_transmittance.x, max(hit_transmittance.y, hit_transmittance.z)) <= 0.0;
     }

@@ -21,6 +21,10 @@ struct SurfaceMaterial {
     vec3 absorption;     // Beer-Lambert coefficient per unit length inside the volume
 };
 
+// Thin-walled glass: transmissive with no volume behind the surface (KHR_materials_volume's
+// thickness 0), so light passes it without bending; a shadow ray may cross it.
+bool material_thin_glass(MaterialInfo m) { return m.transmission > 0.0 && m.thickness <= 0.0; }
+
 vec2 material_uv(MaterialInfo m, int slot, vec2 uv0, vec2 uv1) {
     vec2 uv = ((m.uv_sets >> slot) & 1u) != 0u ? uv1 : uv0;
     vec3 h = vec3(uv, 1.0);

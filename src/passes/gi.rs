@@ -1,20 +1,23 @@
 //! gi: diffuse global illumination, one bounce ray per pixel with next-event estimation and the
 //! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
 //! (shaders-glsl/gi.comp). It also shades the punctual lights past the shadowed ones, one
-//! resampled per pixel with a reservoir kept across frames (common/light_reservoir.glsl).
+//! resampled per pixel with a reservoir kept across frames (common/light_reservoir.glsl). At
+//! half rate gi_fill completes its signals.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::gbuffer;
+use super::gi_fill;
 use super::history::{self, Kept};
 use super::radiance_cache::Cache;
 use crate::gpu::vk;
-use crate::graph::{Output, OutputDesc, Preview};
+use crate::graph::{Output, OutputDesc, Pass, Preview};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 pub const NAME: &str = "gi";
 /// Demodulated diffuse radiance: direct light from emitters and the environment, and indirect.
+/// At half rate the untraced pixels are black, with what gi_fill needs in alpha.
 pub const RADIANCE: Output = Output::new(NAME, "radiance");
 /// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples;
 /// on every surface, the resampled lights' share of it.
@@ -40,8 +43,8 @@ pub struct GiSettings {
     /// the cache answers at the bounce ray's hit); with the cache off, the bounces traced.
     pub bounces: u32,
     /// Trace half of the pixels each frame, on a checkerboard that alternates, and fill the
-    /// others from their traced neighbours (gi.comp). Not with resampled lights, whose
-    /// reservoirs every pixel carries.
+    /// others from their traced neighbours (gi.comp, then gi_fill). Not with resampled lights,
+    /// whose reservoirs every pixel carries.
     pub half_rate: bool,
 }
 
@@ -51,6 +54,16 @@ impl Default for GiSettings {
     }
 }
 
+/// gi's passes and the signals they leave for the rest of the frame.
+pub struct Signals {
+    pub passes: Vec<Box<dyn Pass>>,
+    /// Demodulated diffuse radiance, every pixel.
+    pub radiance: Output,
+    /// The specular signal, every pixel.
+    pub specular: Output,
+}
+
+/// gi, and gi_fill after it at half rate.
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
 /// `resampled_lights`: whether the plan leaves lights to gi's reservoirs (frame-sized then).
 pub fn new(
@@ -60,7 +73,7 @@ pub fn new(
     roughness_cutoff: f32,
     cache: &Cache,
     resampled_lights: bool,
-) -> Result<FullscreenPass> {
+) -> Result<Signals> {
     let mut inputs: Vec<Input> = [
         gbuffer::DEPTH,
         gbuffer::NORMAL,
@@ -87,12 +100,17 @@ pub fn new(
         log::info!("gi: every pixel traced each frame: the resampled lights' reservoirs need every pixel");
     }
     let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff, half_rate: half_rate.into() };
-    let mut pass =
+    let mut gi =
         FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)?;
-    if half_rate {
-        pass.pixels_per_invocation = [2, 1];
+    if !half_rate {
+        return Ok(Signals { passes: vec![Box::new(gi)], radiance: RADIANCE, specular: SPECULAR });
     }
-    Ok(pass)
+    gi.pixels_per_invocation = [2, 1];
+    Ok(Signals {
+        passes: vec![Box::new(gi), Box::new(gi_fill::new(b)?)],
+        radiance: gi_fill::RADIANCE,
+        specular: gi_fill::SPECULAR,
+    })
 }
 
 /// The reservoirs' copy for the next frame.

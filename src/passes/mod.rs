@@ -6,6 +6,7 @@ pub mod composite;
 pub mod fullscreen;
 pub mod gbuffer;
 pub mod gi;
+pub mod gi_fill;
 pub mod history;
 pub mod inject;
 pub mod pathtrace;

@@ -1,6 +1,6 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
-//! gbuffer -> [primary_rays] -> shadows chain -> [radiance_cache] -> gi -> reflections ->
+//! gbuffer -> [primary_rays] -> shadows chain -> [radiance_cache] -> gi -> [gi_fill] -> reflections ->
 //! [svgf_guide, svgf chains: diffuse on gi, specular on reflections, filtered together] ->
 //! composite -> [taa] -> tonemap -> history.
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
@@ -49,16 +49,17 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     // gi makes the diffuse signal and the rough surfaces' specular one; when the plan drops it
     // (smooth metals only), both are zero.
     let (gi_diffuse, gi_specular) = if plan.gi {
-        passes.push(Box::new(passes::gi::new(
+        let gi = passes::gi::new(
             b,
             &settings.gi,
             settings.seed,
             settings.reflections.roughness_cutoff,
             &cache,
             plan.resampled_lights > 0,
-        )?));
+        )?;
+        passes.extend(gi.passes);
         kept.push(passes::gi::kept(plan.resampled_lights > 0));
-        (passes::gi::RADIANCE.into(), passes::gi::SPECULAR.into())
+        (gi.radiance.into(), gi.specular.into())
     } else {
         let zero = crate::graph::zero(crate::gpu::vk::Format::R32G32B32A32_SFLOAT, false);
         (zero, zero)
