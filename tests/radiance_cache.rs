@@ -229,7 +229,8 @@ fn diffuse_box_converges_to_mitsubas_energy() {
 /// Measured: cache on 0.945 with SVGF and TAA and gi at half rate (0.922 at full rate; most
 /// likely because the fill averages neighbours' samples, so fewer of them stand out to the
 /// filters' outlier clamps, which cut the rare bright paths through the metal and glossy
-/// blocks; about 0.96 raw); cache off 0.62. Bound 8%, which a cache that stopped carrying the bounces after the first fails.
+/// blocks; 0.99-1.01 raw over four seeds, README Known gaps); cache off 0.62. Bound 8%, which
+/// a cache that stopped carrying the bounces after the first fails.
 #[test]
 fn glossy_blocks_converge_to_mitsubas_energy() {
     check_energy("glossy_blocks", 0.08, false);
