@@ -74,35 +74,60 @@ bool load_finite(ivec2 q, out vec3 c) {
 struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
     float variance;     // the spatial variance estimate (computed only when asked for)
+    vec3 spread;        // this pixel's share of what the clamp takes out of its neighbours
 };
 
 // One pass over the 7x7 neighbourhood (surface pixels only) for the outlier clamp's bound,
-// mean + k sigma of the luminance, which takes the energy out of fireflies before anything
-// accumulates them; and, with `spatial`, the luminance variance around `l` (this pixel's
+// mean + k sigma of the luminance, which takes a firefly out of the history before anything
+// accumulates it; and, with `spatial`, the luminance variance around `l` (this pixel's
 // clamped luminance, which the luminance weight needs, so the clamp's bound is found first
 // and the window read twice only then).
-Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spatial) {
-    Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0);
+//
+// With `spread` (an established history) the clamp keeps the firefly's energy: each pixel
+// takes an even share of what the clamp takes out of the brightest neighbour on its own
+// surface (normal within 25 degrees, depth within 5%). A firefly's own window never holds it,
+// so its neighbours' bounds leave the window's brightest sample out too: they then bound it as
+// it bounds itself, and what they take back adds up to about what its clamp removed. (Only
+// the brightest: two fireflies in one window are rare, and a per-neighbour account needs the
+// window's luminances kept, which made the pass half as slow again on lavapipe.)
+Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spatial, bool spread) {
+    Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0));
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
     bool clamped = !isinf(svgf.clamp_sigma);
-    float sum = 0.0, sum2 = 0.0, n = 0.0;
+    float sum = 0.0, sum2 = 0.0, n = 0.0, brightest = 0.0, n_same = 0.0;
+    vec3 brightest_same = vec3(0.0);  // the brightest neighbour on this pixel's surface
+    float brightest_same_l = 0.0;
     for (int dy = -3; dy <= 3 && clamped; ++dy) {
         for (int dx = -3; dx <= 3; ++dx) {
             // The centre is left out, so a lone firefly cannot widen its own bound.
             if (dx == 0 && dy == 0) continue;
             ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
-            if (!svgf_guide_surface(imageLoad(in_guide, q))) continue;
+            vec4 gq = imageLoad(in_guide, q);
+            if (!svgf_guide_surface(gq)) continue;
             vec3 s;
             load_finite(q, s);
             float l = luminance(s);
             sum += l;
             sum2 += l * l;
             n += 1.0;
+            brightest = max(brightest, l);
+            if (spread && dot(g.xyz, gq.xyz) > 0.9 && abs(gq.w - g.w) < 0.05 * g.w) {
+                n_same += 1.0;
+                if (l > brightest_same_l) {
+                    brightest_same_l = l;
+                    brightest_same = s;
+                }
+            }
         }
     }
     if (clamped) {
-        float mean = sum / max(n, 1.0);
-        nb.clamp_limit = mean + svgf.clamp_sigma * sqrt(max(0.0, sum2 / max(n, 1.0) - mean * mean));
+        float trim = spread ? brightest : 0.0;
+        float m = max(n - (spread ? 1.0 : 0.0), 1.0);
+        float mean = (sum - trim) / m;
+        nb.clamp_limit = mean + svgf.clamp_sigma * sqrt(max(0.0, (sum2 - trim * trim) / m - mean * mean));
+        if (brightest_same_l > nb.clamp_limit) {
+            nb.spread = brightest_same * (1.0 - nb.clamp_limit / brightest_same_l) / n_same;
+        }
     }
     if (!spatial) return nb;
     float l = min(luminance(c), nb.clamp_limit);
@@ -194,12 +219,12 @@ void main() {
     }
     bool reprojected = wsum > 1e-3;
     float len = reprojected ? min(hist_len / wsum + 1.0, cap) : 1.0;
-    Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), fw, c, len < SVGF_MOMENTS_FRAMES);
+    Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), fw, c, len < SVGF_MOMENTS_FRAMES,
+                                     len >= SVGF_MOMENTS_FRAMES);
     float l = luminance(c);
-    if (l > nb.clamp_limit && l > 0.0) {
-        c *= nb.clamp_limit / l;
-        l = nb.clamp_limit;
-    }
+    if (l > nb.clamp_limit && l > 0.0) c *= nb.clamp_limit / l;
+    c += nb.spread;
+    l = luminance(c);
     vec2 moments = vec2(l, l * l);
     if (reprojected) {
         hist_c /= wsum;
