@@ -4,7 +4,8 @@
 // and history length are reprojected through the motion vectors with bilinear taps that each
 // pass the validity test (on screen, same instance, depth, geometric normal); the new frame is blended in
 // with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
-// counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood, so
+// counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood (5x5
+// once the history is established, when the clamp gives back the light it takes out), so
 // neither poisons the history.
 //
 // The colour's alpha holds its luminance variance (as the deviation, svgf_pack), what the
@@ -89,7 +90,9 @@ struct Neighbourhood {
 // so its neighbours' bounds leave the window's brightest sample out too: they then bound it as
 // it bounds itself, and what they take back adds up to about what its clamp removed. (Only
 // the brightest: two fireflies in one window are rare, and a per-neighbour account needs the
-// window's luminances kept, which made the pass half as slow again on lavapipe.)
+// window's luminances kept, which made the pass half as slow again on lavapipe.) Its window
+// is then 5x5: a smaller window clamps more, which cost light when the clamp dropped it, and
+// now costs nothing but makes the pass as fast as it was before the give-back.
 Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spatial, bool spread) {
     Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0));
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
@@ -97,8 +100,9 @@ Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spati
     float sum = 0.0, sum2 = 0.0, n = 0.0, brightest = 0.0, n_same = 0.0;
     vec3 brightest_same = vec3(0.0);  // the brightest neighbour on this pixel's surface
     float brightest_same_l = 0.0;
-    for (int dy = -3; dy <= 3 && clamped; ++dy) {
-        for (int dx = -3; dx <= 3; ++dx) {
+    int radius = spread ? 2 : 3;  // the young history's spatial variance needs the 7x7 one
+    for (int dy = -radius; dy <= radius && clamped; ++dy) {
+        for (int dx = -radius; dx <= radius; ++dx) {
             // The centre is left out, so a lone firefly cannot widen its own bound.
             if (dx == 0 && dy == 0) continue;
             ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
