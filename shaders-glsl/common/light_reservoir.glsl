@@ -122,8 +122,9 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
 // of light_sample (by power) by the luminance of their unshadowed contribution f cos Le; `f` is
 // the chosen one's f cos. Resampled in primary sample space: every draw's u is uniform, so a
 // draw's resampling weight is its target itself, and delta, area and environment lights mix
-// without a common measure. `weight` includes the RIS factor; pdf is 0, as for a sample no BSDF
-// ray can reach (the caller gives it full weight). Far fewer of its samples are wasted on lights
+// without a common measure. `weight` includes the RIS factor, so pdf is no density to weigh
+// against a BSDF sample's: it only tells whether a BSDF-sampled ray can reach the light (> 0) or
+// not (0: a punctual light). Far fewer of its samples are wasted on lights
 // that are far, out of range or behind the surface than with one draw by power, which matters
 // where a path vertex sees few of many lights. With few lights (none resampled) it draws once,
 // which is light_sample itself at its cost: four draws made gi 14% slower on the default scene
@@ -151,7 +152,6 @@ NeeSample light_sample_resampled(vec3 origin, BrdfInput m, vec3 n, vec3 ng, vec3
     }
     if (!(p_chosen > 0.0)) return nee_none();
     chosen.weight *= (w_sum / float(draws)) / p_chosen;
-    chosen.pdf = 0.0;
     return chosen;
 }
 

@@ -200,6 +200,12 @@ bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandi
     return true;
 }
 
+// A vertex smoother than this is specular: a light sample through its near-delta lobe almost
+// never lands, so the light it reflects from emitters and the environment (a caustic: a mirror
+// throwing the ceiling light onto the floor) is taken by its BRDF-sampled ray instead, and the
+// cache, which answers with a diffuse surface's mean, is not asked there (the path traces on).
+#define RC_SPECULAR_ROUGHNESS 0.15
+
 // Rays of a vertex in rc_radiance_leaving, in the order traced.
 #define RC_RAY_LIGHT 0u  // the light sample's shadow ray
 #define RC_RAY_CELL 1u   // the visibility ray between the vertex and its cache cell's point
@@ -230,10 +236,18 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
         NeeSample ls = light_sample_resampled(leave, m, s.normal, s.normal_geo, v, rng, f);
         BrdfSample bs = brdf_sample(m, s.normal, v, rng_next3(rng));
         bool scatters = bs.pdf > 0.0 && dot(bs.l, s.normal_geo) > 0.0;
+        // At a specular vertex each lobe meets the lights one way only: the diffuse lobe by the
+        // light sample, the specular lobe by the BRDF-sampled ray (its share of that sample),
+        // except a punctual light's, which no ray can hit.
+        bool specular = s.mat.roughness < RC_SPECULAR_ROUGHNESS;
+        if (specular && ls.pdf > 0.0) f = max(f - brdf_eval_specular_cos(m, s.normal, v, ls.dir), vec3(0.0));
+        // What the specular lobe passes on to the light its BRDF-sampled ray meets.
+        vec3 specular_carry = specular && scatters ? throughput * brdf_eval_specular_cos(m, s.normal, v, bs.l) / bs.pdf
+                                                   : vec3(0.0);
         RcCandidate cached;
-        bool may_cache = scatters && vertex >= first_cached &&
+        bool may_cache = scatters && !specular && vertex >= first_cached &&
                          rc_lookup(s.position, s.normal_geo, t, from_screen, copy, cached);
-        bool answered = false;
+        bool answered = false, traced_next = false;
         Hit next;
         next.instance = NO_HIT;
         [[dont_unroll]] for (uint ray = RC_RAY_LIGHT; ray <= RC_RAY_NEXT; ++ray) {
@@ -254,7 +268,8 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
             // Light and cell rays cross see-through surfaces, scaled by what passes them.
             Hit h = trace_ray(o, d, 0.0, tmax, RAY_MASK_ALL, ray != RC_RAY_NEXT);
             if (ray == RC_RAY_LIGHT && h.instance == NO_HIT) {
-                // No BRDF-sampled continuation counts emission: the light sample has full weight.
+                // Full weight: a BRDF-sampled ray counts emission only through a specular lobe,
+                // which the light sample then leaves out.
                 radiance += throughput * f * ls.weight * hit_transmittance;
             } else if (ray == RC_RAY_CELL && h.instance == NO_HIT) {
                 // The BRDF sample's weight estimates the directional albedo that reflects C.
@@ -262,13 +277,19 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                 answered = true;
             } else if (ray == RC_RAY_NEXT) {
                 next = h;
+                traced_next = true;
             }
         }
-        if (next.instance == NO_HIT) break;
+        if (next.instance == NO_HIT) {
+            // Only a traced ray escapes: the environment, seen through a specular lobe.
+            if (traced_next) radiance += specular_carry * env_eval(bs.l);
+            break;
+        }
         throughput *= bs.weight;
         dir = bs.l;
         t = next.t;
         s = hit_surface(next.instance, next.primitive, next.bary, dir);
+        if (emitter_visible_side(next.instance, next.primitive, dir)) radiance += specular_carry * s.mat.emissive;
     }
     return radiance;
 }
