@@ -172,6 +172,7 @@ struct RcCandidate {
     vec3 from;
     vec3 dir;
     float len;
+    bool empty;  // no answer because the cell holds no light yet (its slot taken, no samples)
 };
 
 // The cache's C at surface point p (geometric normal n) reached by a ray of length t, from
@@ -180,7 +181,7 @@ struct RcCandidate {
 // (the caller traces `a`'s visibility ray). `from_screen`: a gi or reflection query, which
 // claims absent cells, proposes points and keeps cells alive.
 bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandidate a) {
-    a = RcCandidate(vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0);
+    a = RcCandidate(vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, false);
     if (rc.enabled == 0u || t < RC_MIN_CELLS * rc_cell_size(p)) return false;
     uint slot = rc_find(p, n, from_screen);
     if (slot == RC_NONE) return false;
@@ -188,9 +189,9 @@ bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandi
         rc_cells[slot].point.w = RC_LIFE;
         if (rc_cells[slot].normal.w == 0.0) rc_propose(slot, p, n);
     }
-    if (rc_cells[slot].normal.w == 0.0) return false;
     vec4 radiance = rc_cells[slot].radiance[copy];
-    if (radiance.a <= 0.0) return false;
+    a.empty = rc_cells[slot].normal.w == 0.0 || radiance.a <= 0.0;
+    if (a.empty) return false;
     float lift = RC_LIFT_CELLS * rc_cell_size(p);
     a.from = p + n * lift;
     vec3 d = rc_cells[slot].point.xyz + rc_cells[slot].normal.xyz * lift - a.from;
@@ -213,7 +214,8 @@ bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandi
 
 // Light leaving surface s toward -dir, reached by a ray of length t, without s's own emission:
 // a light sample at each vertex, and for the rest the cache from vertex `first_cached` on (0:
-// s itself), tracing on by BRDF sampling where the cache cannot answer, `vertices` at most.
+// s itself), tracing on by BRDF sampling where the cache cannot answer, `vertices` at most
+// (RC_VERTICES_DEEP once a cell on the way holds nothing yet).
 // Queries count as from the screen when `from_screen` and read radiance copy `copy`.
 //
 // Every ray goes through one trace_ray call in the inner loop: lavapipe inlines a whole
@@ -245,8 +247,13 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
         vec3 specular_carry = specular && scatters ? throughput * brdf_eval_specular_cos(m, s.normal, v, bs.l) / bs.pdf
                                                    : vec3(0.0);
         RcCandidate cached;
+        cached.empty = false;
         bool may_cache = scatters && !specular && vertex >= first_cached &&
                          rc_lookup(s.position, s.normal_geo, t, from_screen, copy, cached);
+        // A cell that holds no light yet (every cell in the first frame, a place just come into
+        // view) cannot answer: the path traces on as deep as a young cell's update does, so
+        // those frames miss little of the light beyond.
+        if (cached.empty) vertices = max(vertices, RC_VERTICES_DEEP);
         bool answered = false, traced_next = false;
         Hit next;
         next.instance = NO_HIT;
