@@ -1,5 +1,5 @@
 //! Image-quality metrics for comparing renders: per-image errors (MSE, PSNR, relMSE, SSIM,
-//! LDR-/HDR-FLIP) and temporal measures over frame sequences (flicker, ghosting, lag).
+//! LDR-/HDR-FLIP), energy (mean luminance against the reference's) and temporal measures over frame sequences (flicker, ghosting, lag).
 //!
 //! # Data model
 //! Every metric takes [`CpuImage`]s with `Texels::F32` values, rows top to bottom, and reads the
@@ -23,16 +23,19 @@
 //! | [`psnr_display`], [`ssim()`], [`ssim_with`] | display-encoded values in [0, 1] after a [`DisplayTransform`] |
 //! | [`ldr_flip`] | LDR values in [0, 1], sRGB-encoded or linear ([`LdrInput`]) |
 //! | [`hdr_flip`] | linear HDR values, tonemapped by HDR-FLIP itself at several exposures |
+//! | [`luminance_ratio`] | linear luminance, lights seen directly left out |
 //! | [`flicker`], [`ghosting`], [`lag`] | linear luminance per pixel |
 //!
 //! FLIP is implemented here from the papers (Andersson et al., HPG 2020 and EGSR/CGF 2021); see
 //! [`flip`] for what it was checked against.
 
+pub mod energy;
 pub mod flip;
 pub mod psnr;
 pub mod ssim;
 pub mod temporal;
 
+pub use energy::luminance_ratio;
 pub use flip::{DEFAULT_PPD, Exposures, FlipResult, HdrFlipOptions, LdrInput, hdr_flip, ldr_flip, pixels_per_degree};
 pub use psnr::{REL_MSE_EPSILON, mse, psnr, psnr_display, rel_mse, rmse};
 pub use ssim::{ssim, ssim_with};

@@ -147,6 +147,11 @@ pub struct Point {
     /// measured.
     #[serde(default)]
     pub first_flip: Option<f64>,
+    /// Mean luminance over the reference's, lights seen directly left out
+    /// ([`metrics::luminance_ratio`]): the light the frame keeps. Absent in sweeps cached
+    /// before it was measured.
+    #[serde(default)]
+    pub luminance_ratio: Option<f64>,
     /// PSNR (dB) after ACES + sRGB; absent when the images are identical (infinite).
     pub psnr_db: Option<f64>,
     /// SSIM after ACES + sRGB.
@@ -436,6 +441,8 @@ fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Resu
         .map(|first| metrics::hdr_flip(reference, &first, &HdrFlipOptions::default()))
         .transpose()
         .with_context(|| format!("{name}: FLIP of the first frame"))?;
+    let luminance_ratio = metrics::luminance_ratio(reference, &img)
+        .with_context(|| format!("{name}: luminance against the reference"))?;
     let display = DisplayTransform::AcesSrgb { exposure: 0.0 };
     let psnr = metrics::psnr_display(reference, &img, display).with_context(|| format!("{name}: PSNR"))?;
     let ssim = metrics::ssim_with(reference, &img, display).with_context(|| format!("{name}: SSIM"))?;
@@ -449,6 +456,7 @@ fn measure(config: Config, run: Run, reference: &CpuImage, seconds: f64) -> Resu
         flip: flip.mean,
         cut_flip: cut_flip.map(|f| f.mean),
         first_flip: first_flip.map(|f| f.mean),
+        luminance_ratio: Some(luminance_ratio),
         psnr_db: psnr.is_finite().then_some(psnr),
         ssim,
         pareto: false,
@@ -575,6 +583,7 @@ pub(crate) mod testing {
                 flip,
                 cut_flip: None,
                 first_flip: None,
+                luminance_ratio: None,
                 psnr_db: Some(30.0),
                 ssim: 0.9,
                 pareto,

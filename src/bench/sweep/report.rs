@@ -34,8 +34,17 @@ pub fn table(s: &SceneSweep) -> String {
         s.reference.made.noise_flip
     );
     t += &format!(
-        "  {:<18} {:>9} {:>9} {:>8} {:>9} {:>7} {:>14} {:>9} {:>10}\n",
-        "configuration", "frame ms", "stamp ms", "FLIP", "PSNR dB", "SSIM", "PT FLIP @time", "FLIP cut", "FLIP first"
+        "  {:<18} {:>9} {:>9} {:>8} {:>7} {:>9} {:>7} {:>14} {:>9} {:>10}\n",
+        "configuration",
+        "frame ms",
+        "stamp ms",
+        "FLIP",
+        "energy",
+        "PSNR dB",
+        "SSIM",
+        "PT FLIP @time",
+        "FLIP cut",
+        "FLIP first"
     );
     let mut order: Vec<&Point> = s.points.iter().collect();
     order.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
@@ -44,13 +53,15 @@ pub fn table(s: &SceneSweep) -> String {
         let pt = path_tracer_flip_at(s, s.frames as f64 * p.frame_ms).map_or("-".to_string(), |f| format!("{f:.4}"));
         let cut = p.cut_flip.map_or("-".to_string(), |f| format!("{f:.4}"));
         let first = p.first_flip.map_or("-".to_string(), |f| format!("{f:.4}"));
+        let energy = p.luminance_ratio.map_or("-".to_string(), |e| format!("{e:.4}"));
         t += &format!(
-            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>9} {:>7.4} {:>14} {:>9} {:>10}\n",
+            "{} {:<18} {:>9.2} {:>9.2} {:>8.4} {:>7} {:>9} {:>7.4} {:>14} {:>9} {:>10}\n",
             if p.pareto { "*" } else { " " },
             p.name,
             p.frame_ms,
             p.timestamp_ms,
             p.flip,
+            energy,
             psnr,
             p.ssim,
             pt,
@@ -61,7 +72,8 @@ pub fn table(s: &SceneSweep) -> String {
     if !s.path_tracer.is_empty() {
         t += &format!(
             "  PT FLIP @time: the path tracer's error after the time {} frames of the configuration took \
-             (static camera; '-' beyond its curve)\n  FLIP cut: the frame after a camera cut at the end of \
+             (static camera; '-' beyond its curve)\n  energy: the last frame's mean luminance over the reference's, lights seen directly left \
+             out\n  FLIP cut: the frame after a camera cut at the end of \
              the run (no SVGF or TAA history; the radiance cache keeps its cells)\n  FLIP first: the run's \
              first frame (no history, an empty radiance cache)\n  path tracer \
              (progressive, same reference):\n",
@@ -131,8 +143,10 @@ mod tests {
         let mut s = sweep(&[("d0-s5-b1-r1", 10.0, 0.3, true), ("d4-s5-b1-r1", 12.0, 0.1, true)]);
         s.points[1].cut_flip = Some(0.2);
         s.points[1].first_flip = Some(0.25);
+        s.points[1].luminance_ratio = Some(0.9812);
         let t = table(&s);
-        assert!(t.contains("FLIP cut") && t.contains("FLIP first"), "{t}");
+        assert!(t.contains("FLIP cut") && t.contains("FLIP first") && t.contains("energy"), "{t}");
+        assert!(t.lines().any(|l| l.contains("d4-s5-b1-r1") && l.contains(" 0.9812 ")), "{t}");
         let row = t.lines().find(|l| l.contains("d4-s5-b1-r1") && l.contains("0.1000")).expect("the default's row");
         assert!(row.trim_end().ends_with("0.2000     0.2500"), "{row}");
         // A point measured without a cut shows none.
