@@ -12,6 +12,7 @@ mod common;
 
 use glam::{Quat, Vec3, Vec4};
 use hybrid_rt::gpu::Context;
+use hybrid_rt::metrics;
 use hybrid_rt::passes::pathtrace;
 use hybrid_rt::render::{Environment, RenderMode, Renderer, Settings};
 use hybrid_rt::scene::{Camera, Instance, Material, Scene, builtin};
@@ -92,7 +93,7 @@ fn mean_luminance(ctx: &Arc<Context>, reference_spp: Option<u32>) -> f64 {
             .chunks_exact(4)
             .map(|p| {
                 assert!(p[..3].iter().all(|c| c.is_finite()), "a pixel is not finite");
-                0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
+                metrics::luminance(p[0], p[1], p[2]) as f64
             })
             .sum();
         sum / (px.len() / 4) as f64

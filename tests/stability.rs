@@ -86,7 +86,8 @@ fn fast_pan() {
 /// neighbours; following the reflected wall (the virtual point at the hit distance) took SVGF
 /// alone to 0.27, and giving a mirror's reflection no spatial footprint to 0.178; with TAA
 /// (0.266 while it reprojected with the floor's motion, 0.202 since it follows the reflection
-/// on metals too; 0.213 since SVGF's outlier clamp keeps the light it takes out). Bounds 0.30
+/// on metals too; 0.213 since SVGF's outlier clamp keeps the light it takes out; 0.212, raw
+/// 0.087, since path vertices take the light that specular surfaces throw). Bounds 0.30
 /// denoised, 0.15 raw.
 #[test]
 fn mirror_pan() {
@@ -164,7 +165,9 @@ fn grazing_floor() {
 
 /// Metrics: fraction of pixels over 10x their 5x5 median, and the peak-to-mean ratio, in a
 /// room lit only through the hot spot of a tiny very bright emitter. Measured: denoised 0 and
-/// 25 (31 before the clamp kept the fireflies' light, 2026-12-03), raw 0.092 and 458. Without the radiance cache raw measured 0.011: with it a pixel shows
+/// 25 (31 before the clamp kept the fireflies' light, 2026-12-03; 28 since), raw 0.092 and 458
+/// (0.104 and 425 since path vertices take caustics through specular surfaces, sampled as
+/// sparks). Without the radiance cache raw measured 0.011: with it a pixel shows
 /// its gi ray's cell, and after 8 frames a cell holds at most 8 cosine samples, the lucky ones
 /// of which saw the hot spot (0.043 after 32 frames, as the cells fill). Bounds 0.002 and 100
 /// denoised, 0.12 and 5000 raw (a peak is one sample's luck). The denoiser must remove at least

@@ -1,7 +1,7 @@
 //! Energy: how much light an image holds against a reference, the measure of a renderer that
 //! drops light (a truncated path, a clamp that cuts bright samples) however little noise it has.
 
-use super::{Result, luminance_plane, rgb_pair};
+use super::{Result, check_dims, luminance_plane};
 use crate::image_io::CpuImage;
 
 /// A pixel whose reference luminance exceeds this many times the reference's 90th percentile
@@ -12,8 +12,8 @@ pub const EMITTER_FACTOR: f32 = 4.0;
 /// Mean luminance of `test` over that of `reference`, both over the pixels that are not lights
 /// seen directly ([`EMITTER_FACTOR`]). 1 when the test image holds the reference's light.
 pub fn luminance_ratio(reference: &CpuImage, test: &CpuImage) -> Result<f64> {
-    rgb_pair(reference, test)?;
     let r = luminance_plane(reference, "reference")?;
+    check_dims("test", (reference.width, reference.height), (test.width, test.height))?;
     let t = luminance_plane(test, "test")?;
     let mut sorted = r.clone();
     sorted.sort_by(f32::total_cmp);

@@ -1,5 +1,6 @@
 //! Image-quality metrics for comparing renders: per-image errors (MSE, PSNR, relMSE, SSIM,
-//! LDR-/HDR-FLIP), energy (mean luminance against the reference's) and temporal measures over frame sequences (flicker, ghosting, lag).
+//! LDR-/HDR-FLIP), energy (mean luminance against the reference's) and temporal measures over
+//! frame sequences (flicker, ghosting, lag).
 //!
 //! # Data model
 //! Every metric takes [`CpuImage`]s with `Texels::F32` values, rows top to bottom, and reads the
@@ -163,7 +164,7 @@ impl Mask {
     }
 }
 
-fn check_dims(what: &str, expected: (u32, u32), found: (u32, u32)) -> Result<()> {
+pub(crate) fn check_dims(what: &str, expected: (u32, u32), found: (u32, u32)) -> Result<()> {
     if expected != found {
         return Err(MetricError::SizeMismatch {
             what: what.to_string(),
