@@ -80,7 +80,7 @@ float svgf_footprint(float roughness) { return smoothstep(0.05, 0.35, roughness)
 
 // A filtered signal's texel (svgf_temporal's colour, every a-trous iteration's; rgba16f): the
 // colour in rgb, the standard deviation of its luminance in alpha. Half precision because the
-// filter is bound by its loads (two dozen taps per pixel, each iteration): on lavapipe it cuts
+// filter is bound by its loads (8 taps per pixel and signal, each iteration): on lavapipe it cuts
 // the denoiser by a third. The deviation rather than the variance because the variance of a
 // bright signal (a light's reflection) would pass half's largest value, 65504; the colour is
 // kept below it.
@@ -105,7 +105,7 @@ vec4 svgf_pack(vec3 c, float variance) {
 vec4 svgf_unpack(vec4 texel) { return vec4(texel.rgb, texel.a * texel.a); }
 
 // What the a-trous weights read of a neighbour, written by svgf_guide into one rgba32f texel so
-// that each of the filter's 24 taps loads one texel instead of three (depth, normal, ids): the
+// that each of the filter's taps loads one texel instead of three (depth, normal, ids): the
 // shading normal in xyz, the view depth in w, -1 where there is no surface.
 vec4 svgf_guide_pack(float depth, vec3 n, uint instance) {
     return instance == NO_INSTANCE ? vec4(0.0, 0.0, 1.0, -1.0) : vec4(n, depth);

@@ -1,6 +1,6 @@
 //! svgf_guide: the G-buffer texels the a-trous iterations weigh their taps by (view depth,
 //! shading normal, whether there is a surface), packed into one texel per pixel once per frame,
-//! so each of an iteration's 24 taps loads one texel instead of three
+//! so each of an iteration's taps loads one texel instead of three
 //! (shaders-glsl/svgf_guide.comp, `svgf_guide_pack` in common/svgf.glsl). The frame runs it
 //! once, before any chain.
 
