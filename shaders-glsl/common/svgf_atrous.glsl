@@ -8,10 +8,11 @@
 // 3x3 rather than Schied et al.'s 5x5 B3 spline because the filter is bound by its loads:
 // 8 taps a signal instead of 24. The variance is prefiltered over the 3x3 neighbourhood as in
 // the paper, and at step 1 those are the kernel's own taps, so they are loaded once. On
-// lavapipe the four iterations cost 40% less than with the 5x5 kernel; after 64 frames the
-// error is the same or lower, after a camera cut up to 13% higher (the 3x3 cascade reaches 15
-// pixels, the 5x5 one 30). A fifth iteration (step 16) won that back but let a moved light's
-// glow bleed across the stability suite's room for a frame (README, "Where the frame goes").
+// lavapipe the four iterations cost 40% less than with the 5x5 kernel, at the same or lower
+// error after 64 frames. Four 3x3 iterations reach 15 pixels, four 5x5 ones 30: where that
+// mattered, a pixel without history, svgf_temporal starts it from its 7x7 window's mean. A
+// fifth iteration (step 16) let a moved light's glow bleed across the stability suite's room
+// for a frame (README, "A 3x3 a-trous kernel").
 //
 // The pair filters diffuse and specular in one dispatch: each tap's guide texel (depth, normal,
 // whether there is a surface; svgf_guide) is loaded and its depth and normal weights computed

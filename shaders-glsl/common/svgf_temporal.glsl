@@ -8,6 +8,11 @@
 // once the history is established, when the clamp gives back the light it takes out), so
 // neither poisons the history.
 //
+// A pixel with no history at all takes the edge-aware mean of that 7x7 window (on its own
+// instance) in place of its sample: the a-trous iterations then start from less noise after a
+// disocclusion, a camera cut or a change of the lights, which lets their 3x3 kernel stay
+// narrow (common/svgf_atrous.glsl).
+//
 // The colour's alpha holds its luminance variance (as the deviation, svgf_pack), what the
 // a-trous iterations scale their luminance weight by: from the temporal moments, or, while the
 // history is shorter than SVGF_MOMENTS_FRAMES, estimated over the same 7x7 neighbourhood of
@@ -76,13 +81,15 @@ struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
     float variance;     // the spatial variance estimate (computed only when asked for)
     vec3 spread;        // this pixel's share of what the clamp takes out of its neighbours
+    vec3 blurred;       // the edge-aware mean of the clamped samples (only with the variance)
 };
 
 // One pass over the 7x7 neighbourhood (surface pixels only) for the outlier clamp's bound,
 // mean + k sigma of the luminance, which takes a firefly out of the history before anything
 // accumulates it; and, with `spatial`, the luminance variance around `l` (this pixel's
 // clamped luminance, which the luminance weight needs, so the clamp's bound is found first
-// and the window read twice only then).
+// and the window read twice only then) and the edge-aware mean of the clamped samples on this
+// pixel's instance.
 //
 // With `spread` (an established history) the clamp keeps the firefly's energy: each pixel
 // takes an even share of what the clamp takes out of the brightest neighbour on its own
@@ -99,8 +106,8 @@ struct Neighbourhood {
 // bound at 4 sigma and 0.974 at 8 (gi at full rate: 0.857 and 0.891).
 #define SVGF_ESTABLISHED_SIGMA_SCALE 2.0
 
-Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spatial, bool spread) {
-    Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0));
+Neighbourhood neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c, bool spatial, bool spread) {
+    Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0), vec3(0.0));
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
     bool clamped = !isinf(svgf.clamp_sigma);
     float sum = 0.0, sum2 = 0.0, n = 0.0, brightest = 0.0, n_same = 0.0;
@@ -143,7 +150,8 @@ Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spati
     if (!spatial) return nb;
     float l = min(luminance(c), nb.clamp_limit);
     vec2 m = vec2(0.0);
-    float wsum = 0.0;
+    vec3 blurred = vec3(0.0);
+    float wsum = 0.0, blur_wsum = 0.0;
     for (int dy = -3; dy <= 3; ++dy) {
         for (int dx = -3; dx <= 3; ++dx) {
             ivec2 q = px + ivec2(dx, dy);
@@ -152,16 +160,22 @@ Neighbourhood neighbourhood(ivec2 px, vec4 g, float fwidth_z, vec3 c, bool spati
             if (!svgf_guide_surface(gq)) continue;
             vec3 s;
             load_finite(q, s);
-            float lq = min(luminance(s), nb.clamp_limit);
+            float lq_raw = luminance(s);
+            float lq = min(lq_raw, nb.clamp_limit);
             float inv_z_scale = 1.0 / (svgf.sigma_z * fwidth_z * length(vec2(dx, dy)) + 1e-4);
             // The luminance weight uses a fixed scale: there is no variance to scale it yet.
             float w = exp(-svgf_depth_exponent(g.w, gq.w, inv_z_scale) - svgf_normal_exponent(g.xyz, gq.xyz) -
                           abs(l - lq) / svgf.sigma_l);
             m += w * vec2(lq, lq * lq);
             wsum += w;
+            if (imageLoad(g_ids, q).x == id) {
+                blurred += w * (lq_raw > lq ? s * (lq / lq_raw) : s);
+                blur_wsum += w;
+            }
         }
     }
     m /= max(wsum, 1e-6);
+    nb.blurred = blurred / max(blur_wsum, 1e-6);
     nb.variance = max(0.0, m.y - m.x * m.x);
     return nb;
 }
@@ -194,6 +208,7 @@ void main() {
     // Where this pixel's surface was last frame, in continuous pixel coordinates.
     vec2 prev_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
     float cap = svgf.history_cap;
+    float footprint = 1.0;  // how much of the young sample's spatial mean stands for it
     // The depth test's tolerance: fetched away from the surface's own motion (the virtual
     // point's), the previous sample is on the same surface a few pixels off, where depth
     // differs by about fwidth per pixel.
@@ -208,6 +223,7 @@ void main() {
         fw_tolerance = fw * (1.0 + distance(prev_pos, surface_pos));
     }
     cap = mix(GLOSSY_HISTORY_CAP, cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
+    footprint = svgf_footprint(roughness);
 #endif
     vec2 base = floor(prev_pos - 0.5);
     vec2 f = prev_pos - 0.5 - base;
@@ -230,11 +246,16 @@ void main() {
     }
     bool reprojected = wsum > 1e-3;
     float len = reprojected ? min(hist_len / wsum + 1.0, cap) : 1.0;
-    Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), fw, c, len < SVGF_MOMENTS_FRAMES,
+    Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), id, fw, c, len < SVGF_MOMENTS_FRAMES,
                                      len >= SVGF_MOMENTS_FRAMES);
     float l = luminance(c);
     if (l > nb.clamp_limit && l > 0.0) c *= nb.clamp_limit / l;
     c += nb.spread;
+    // No history at all (a disocclusion, a camera cut, changed lights): the sample is replaced
+    // by the edge-aware mean of its 7x7 window on the same instance, which the variance
+    // estimate has weighed anyway, so the a-trous iterations start from less noise. A narrow
+    // lobe's reflection keeps its sharpness (svgf_footprint, as in the a-trous filter).
+    if (!reprojected && finite) c = mix(c, nb.blurred, footprint);
     l = luminance(c);
     vec2 moments = vec2(l, l * l);
     if (reprojected) {
