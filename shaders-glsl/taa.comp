@@ -30,13 +30,15 @@ layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_color;
 // Motion vectors differing by more than this many pixels belong to different surfaces.
 #define DISOCCLUSION_MOTION 0.5
 // The new frame's weight rises linearly with the motion from `taa.blend` (still) to FAST_BLEND
-// at FAST_MOTION pixels a frame and above (no history: at that speed what the clamp lets
-// through is smear, not detail). Tuned on the stability suite's fast pan (2.5 px a frame).
-#define FAST_MOTION 4.0
+// at `taa.fast_motion` pixels a frame and above (no history: at that speed what the clamp lets
+// through is smear, not detail). Tuned on the stability suite's fast pan (2.5 px a frame). The
+// renderer shrinks the jitter by as much as the camera's motion raises the blend
+// (src/passes/taa.rs `jitter_scale`).
 #define FAST_BLEND 1.0
 
 layout(push_constant) uniform TaaParams {
-    float blend;  // weight of the new frame
+    float blend;        // weight of the new frame where the image holds still
+    float fast_motion;  // pixels a frame from which the new frame is taken whole
 } taa;
 
 vec3 to_ycocg(vec3 c) {
@@ -105,7 +107,7 @@ void main() {
     if (valid) {
         vec3 hist = to_ycocg(history_catmull_rom(prev_pos));
         vec2 moved = vec2(px) + 0.5 - prev_pos;
-        float blend = mix(taa.blend, FAST_BLEND, clamp(length(moved) / FAST_MOTION, 0.0, 1.0));
+        float blend = mix(taa.blend, FAST_BLEND, clamp(length(moved) / taa.fast_motion, 0.0, 1.0));
         result = mix(from_ycocg(clamp(hist, lo, hi)), cur, blend);
     }
     imageStore(out_color, px, vec4(result, 1.0));

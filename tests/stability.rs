@@ -72,11 +72,14 @@ fn camera_cut() {
 /// 0.062). Bounds 0.27 denoised, 0.25 raw (about 1.4x), and denoised within 1.25x of raw
 /// (1.09 measured; 1.40 before). With gi at half rate: denoised 0.189, raw 0.157 (1.20x): the
 /// fill's averaged samples lowered the raw frame's noise more than the denoised frame's error.
+/// Since the jitter shrinks as the camera moves the image (`taa::jitter_scale`): denoised
+/// 0.102, raw 0.155 (0.66x; 0.091 with no jitter at all while the camera moves). Bounds 0.15
+/// denoised, 0.25 raw, and the denoised frame no worse than the raw one.
 #[test]
 fn fast_pan() {
     let (denoised, raw) = run("fast pan", stability::fast_pan);
     let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
-    assert!(d <= 1.25 * r, "during the pan the denoised frame is {:.2}x the raw error: {d:.4} vs {r:.4}", d / r);
+    assert!(d <= r, "during the pan the denoised frame is {:.2}x the raw error: {d:.4} vs {r:.4}", d / r);
 }
 
 /// Metric: relative mean absolute luminance error over a near-mirror floor (roughness 0.05)
@@ -87,8 +90,8 @@ fn fast_pan() {
 /// alone to 0.27, and giving a mirror's reflection no spatial footprint to 0.178; with TAA
 /// (0.266 while it reprojected with the floor's motion, 0.202 since it follows the reflection
 /// on metals too; 0.213 since SVGF's outlier clamp keeps the light it takes out; 0.212, raw
-/// 0.087, since path vertices take the light that specular surfaces throw). Bounds 0.30
-/// denoised, 0.15 raw.
+/// 0.087, since path vertices take the light that specular surfaces throw; 0.197 since the
+/// jitter shrinks as the camera moves the image). Bounds 0.26 denoised, 0.15 raw.
 #[test]
 fn mirror_pan() {
     let (denoised, raw) = run("mirror pan", stability::mirror_pan);

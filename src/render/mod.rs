@@ -123,6 +123,9 @@ pub struct Renderer {
     /// Frames rendered so far; the next frame's index.
     pub frame_index: u32,
     prev_view: Option<View>,
+    /// The centre of the scene's bounds at the start: the distance at which the camera's motion is
+    /// measured for TAA's jitter (`taa::jitter_scale`).
+    scene_centre: glam::Vec3,
     pub last_view: Option<View>,
     pub last_pass_times: Vec<PassTime>,
     /// Wall-clock time of the last frame from recording to its fence, in ms. Benchmarks use
@@ -215,6 +218,8 @@ impl Renderer {
         let camera = camera::resolve(&scene, camera)?;
         let pool = CommandPool::new(ctx)?;
         let pose = scene.evaluate(settings.start_time);
+        let (lo, hi) = scene.bounds(&pose);
+        let scene_centre = if lo.is_finite() && hi.is_finite() { (lo + hi) * 0.5 } else { glam::Vec3::ZERO };
         let scene_gpu = SceneGpu::upload(ctx, &pool, shaders, &scene, &pose, backend, &environment, settings.brdf)?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
         let parts = frame_parts(&b, &settings, &plan)?;
@@ -234,6 +239,7 @@ impl Renderer {
             frame_index: 0,
             prev_view: None,
             last_view: None,
+            scene_centre,
             last_pass_times: Vec::new(),
             last_frame_wall_ms: 0.0,
             profile_passes: false,
@@ -388,7 +394,12 @@ impl Renderer {
         let size = Vec2::new(self.settings.width as f32, self.settings.height as f32);
         let prev = self.prev_view.unwrap_or(*view);
         let vp = view.view_proj();
-        let jitter = if self.settings.taa { passes::taa::jitter(frame) } else { [0.0; 2] };
+        let jitter = if self.settings.taa {
+            let scale = passes::taa::jitter_scale(&prev, view, size, self.scene_centre);
+            passes::taa::jitter(frame).map(|j| j * scale)
+        } else {
+            [0.0; 2]
+        };
         let reset = frame == 0 || self.cut_pending;
         FrameUniforms {
             view: view.view.to_cols_array_2d(),
