@@ -42,6 +42,22 @@ impl View {
     }
 }
 
+/// How far the camera's motion from `prev` to `view` carries the image, in pixels: the most any
+/// of the screen's centre and corners moves, for points at the distance of `focus` (a turn
+/// moves every depth alike, a step sideways the near ones more). TAA's jitter follows it
+/// (`passes::taa::jitter_scale`).
+pub fn image_motion(prev: &View, view: &View, size: Vec2, focus: Vec3) -> f32 {
+    let distance = (focus - view.position).length().max(view.znear);
+    [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+        .map(|(u, v)| {
+            let pixel = Vec2::new(u, v) * size;
+            let p = view.position + view.ray_dir(pixel, size) * distance;
+            (prev.project(p, size) - pixel).length()
+        })
+        .into_iter()
+        .fold(0.0f32, |a, b| if b.is_nan() { f32::INFINITY } else { a.max(b) })
+}
+
 /// Which camera to use: by name or by index, or automatic.
 #[derive(Clone, Debug, Default)]
 pub enum CameraChoice {
@@ -123,6 +139,40 @@ pub fn perspective(view: Mat4, position: Vec3, yfov: f32, aspect: f32, znear: f3
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A camera at `x` looking down -Z at the origin, yawed by `yaw` radians.
+    fn yawed(x: f32, yaw: f32) -> View {
+        let position = Vec3::new(x, 0.0, 5.0);
+        let look = Mat4::from_rotation_y(-yaw) * Mat4::look_at_rh(position, Vec3::new(x, 0.0, 0.0), Vec3::Y);
+        perspective(look, position, 1.0, 1.0, 0.1, 100.0)
+    }
+
+    #[test]
+    fn image_motion_measures_turns_and_steps_in_pixels() {
+        let size = Vec2::splat(256.0);
+        let focus = Vec3::ZERO;
+        // Still: nothing but the rounding of the corners' rays through two matrices.
+        assert!(image_motion(&yawed(0.0, 0.0), &yawed(0.0, 0.0), size, focus) < 1e-2);
+        // yfov 1 rad over 256 pixels: about 233 pixels per radian at the centre, a little more
+        // at the corners. A turn of 2 / 233 rad: 2 pixels and a little more.
+        let turn = image_motion(&yawed(0.0, 0.0), &yawed(0.0, 2.0 / 233.0), size, focus);
+        assert!((2.0..2.8).contains(&turn), "a turn of about 2 pixels: {turn}");
+        // Sideways by 0.1 at a distance of 5: 4.7 pixels at the centre, about 5.9 at the
+        // corners, whose points (5 along their rays) are nearer in depth.
+        let step = image_motion(&yawed(0.0, 0.0), &yawed(0.1, 0.0), size, focus);
+        assert!((5.5..6.3).contains(&step), "a step of about 5.9 pixels: {step}");
+        // A camera cut to the opposite side: far off the screen or behind it, never a NaN.
+        let behind = perspective(
+            Mat4::look_at_rh(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, Vec3::Y),
+            Vec3::new(0.0, 0.0, -5.0),
+            1.0,
+            1.0,
+            0.1,
+            100.0,
+        );
+        let cut = image_motion(&behind, &yawed(0.0, 0.0), size, focus);
+        assert!(cut > 100.0, "a cut: {cut}");
+    }
 
     #[test]
     fn projection_puts_up_at_the_top() {

@@ -124,7 +124,7 @@ pub struct Renderer {
     pub frame_index: u32,
     prev_view: Option<View>,
     /// The centre of the scene's bounds at the start: the distance at which the camera's motion is
-    /// measured for TAA's jitter (`taa::jitter_scale`).
+    /// measured for TAA's jitter (`camera::image_motion`).
     scene_centre: glam::Vec3,
     pub last_view: Option<View>,
     pub last_pass_times: Vec<PassTime>,
@@ -395,7 +395,7 @@ impl Renderer {
         let prev = self.prev_view.unwrap_or(*view);
         let vp = view.view_proj();
         let jitter = if self.settings.taa {
-            let scale = passes::taa::jitter_scale(&prev, view, size, self.scene_centre);
+            let scale = passes::taa::jitter_scale(camera::image_motion(&prev, view, size, self.scene_centre));
             passes::taa::jitter(frame).map(|j| j * scale)
         } else {
             [0.0; 2]
