@@ -73,9 +73,9 @@ fn camera_cut() {
 /// (1.09 measured; 1.40 before). With gi at half rate: denoised 0.189, raw 0.157 (1.20x): the
 /// fill's averaged samples lowered the raw frame's noise more than the denoised frame's error.
 /// Since the jitter shrinks as the camera moves the image (`taa::jitter_scale`,
-/// `camera::image_motion`): denoised
-/// 0.102, raw 0.155 (0.66x; 0.091 with no jitter at all while the camera moves). Bounds 0.15
-/// denoised, 0.25 raw, and the denoised frame no worse than the raw one.
+/// `camera::image_motion`): denoised 0.102, raw 0.155 (0.66x; 0.091 with no jitter at all
+/// while the camera moves). Bounds 0.15 denoised, 0.25 raw, and the denoised frame no worse
+/// than the raw one.
 #[test]
 fn fast_pan() {
     let (denoised, raw) = run("fast pan", stability::fast_pan);
