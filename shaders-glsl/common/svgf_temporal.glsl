@@ -81,15 +81,15 @@ struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
     float variance;     // the spatial variance estimate (computed only when asked for)
     vec3 spread;        // this pixel's share of what the clamp takes out of its neighbours
-    vec3 blurred;       // the edge-aware mean of the clamped samples (only with the variance)
+    vec3 blurred;       // the edge-aware mean of the clamped samples (only with `blur`)
 };
 
 // One pass over the 7x7 neighbourhood (surface pixels only) for the outlier clamp's bound,
 // mean + k sigma of the luminance, which takes a firefly out of the history before anything
 // accumulates it; and, with `spatial`, the luminance variance around `l` (this pixel's
 // clamped luminance, which the luminance weight needs, so the clamp's bound is found first
-// and the window read twice only then) and the edge-aware mean of the clamped samples on this
-// pixel's instance.
+// and the window read twice only then) and, with `blur` (no history at all), the edge-aware
+// mean of the clamped samples on this pixel's instance.
 //
 // With `spread` (an established history) the clamp keeps the firefly's energy: each pixel
 // takes an even share of what the clamp takes out of the brightest neighbour on its own
@@ -106,7 +106,7 @@ struct Neighbourhood {
 // bound at 4 sigma and 0.974 at 8 (gi at full rate: 0.857 and 0.891).
 #define SVGF_ESTABLISHED_SIGMA_SCALE 2.0
 
-Neighbourhood neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c, bool spatial, bool spread) {
+Neighbourhood neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c, bool spatial, bool spread, bool blur) {
     Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0), vec3(0.0));
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
     bool clamped = !isinf(svgf.clamp_sigma);
@@ -168,7 +168,7 @@ Neighbourhood neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c, b
                           abs(l - lq) / svgf.sigma_l);
             m += w * vec2(lq, lq * lq);
             wsum += w;
-            if (imageLoad(g_ids, q).x == id) {
+            if (blur && imageLoad(g_ids, q).x == id) {
                 blurred += w * (lq_raw > lq ? s * (lq / lq_raw) : s);
                 blur_wsum += w;
             }
@@ -247,7 +247,7 @@ void main() {
     bool reprojected = wsum > 1e-3;
     float len = reprojected ? min(hist_len / wsum + 1.0, cap) : 1.0;
     Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), id, fw, c, len < SVGF_MOMENTS_FRAMES,
-                                     len >= SVGF_MOMENTS_FRAMES);
+                                     len >= SVGF_MOMENTS_FRAMES, !reprojected);
     float l = luminance(c);
     if (l > nb.clamp_limit && l > 0.0) c *= nb.clamp_limit / l;
     c += nb.spread;
