@@ -42,6 +42,18 @@ fn atrous(i: u32) -> Output {
     svgf::atrous::COLOR.of(svgf::iteration(TEST_SIGNAL, i))
 }
 
+/// Uniform noise in [0, 1] from xorshift32, seeded: independent from pixel to pixel and frame
+/// to frame, the same on every run.
+fn xorshift(seed: u32) -> impl FnMut() -> f32 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state as f32 / u32::MAX as f32
+    }
+}
+
 /// Every luminance weight is 1, nothing is clamped and every pixel filtered in every
 /// iteration: only the kernel and geometry act.
 fn no_luminance_stopping() -> SvgfSettings {
@@ -269,14 +281,7 @@ fn converged_pixels_skip_the_later_iterations() {
 fn half_precision_history_keeps_the_mean_of_a_noisy_signal() {
     let ctx = common::validated_context();
     let mut r = renderer_with(&ctx, no_luminance_stopping(), 0.0);
-    let mut state = 0x2545_f491u32;
-    let mut uniform = move || {
-        // xorshift32: noise independent from pixel to pixel and frame to frame.
-        state ^= state << 13;
-        state ^= state >> 17;
-        state ^= state << 5;
-        state as f32 / u32::MAX as f32
-    };
+    let mut uniform = xorshift(0x2545_f491);
     for _ in 0..64 {
         let texels = (0..W * H)
             .map(|_| {
@@ -310,17 +315,11 @@ fn a_pixel_without_history_takes_its_windows_mean() {
     let mut r = renderer_with(&ctx, no_luminance_stopping(), 0.0);
     r.render_frame().unwrap();
     let ids = r.read_output(passes::gbuffer::IDS).unwrap();
-    let mut state = 0x9e37_79b9u32;
+    let mut uniform = xorshift(0x9e37_79b9);
     let texels: Vec<[f32; 4]> = (0..W * H)
         .map(|i| {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            let v = if ids.get_u32(i % W, i / W, 0) == facts::SPHERE_INSTANCE {
-                10.0
-            } else {
-                0.5 + state as f32 / u32::MAX as f32
-            };
+            let noise = 0.5 + uniform();
+            let v = if ids.get_u32(i % W, i / W, 0) == facts::SPHERE_INSTANCE { 10.0 } else { noise };
             [v, v, v, 1.0]
         })
         .collect();
