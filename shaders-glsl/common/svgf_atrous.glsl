@@ -119,8 +119,9 @@ void main() {
     }
     // Each tap is loaded once: its geometry exponent (depth and normal, and the kernel as
     // -log k) and, at step 1, the variance's prefilter first; then the luminance weight, which
-    // needs the prefiltered variance. (No `continue` in this loop: with one, lavapipe kept the taps in
-    // memory rather than in registers, and the iteration cost twice as much.)
+    // needs the prefiltered variance. (No `continue` in this loop: with one, the iteration cost
+    // twice as much on lavapipe, most likely because the taps then stayed in memory rather
+    // than in registers; not confirmed in its compiled code.)
     float z_scale = svgf.sigma_z * imageLoad(g_depth, px).g * float(svgf.step);
     float e_geometry[TAPS];
     vec4 c_q[TAPS][SIGNALS];
