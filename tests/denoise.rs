@@ -194,8 +194,8 @@ fn curved_surfaces_are_not_faceted() {
     let mut r = renderer(&ctx, builtin::facet_test(), s);
     common::render_frames(&mut r, 8);
     let last = hybrid_rt::passes::svgf::SvgfSettings::default().iterations - 1;
-    let diffuse = atrous::DIFFUSE.of(svgf::iteration(atrous::PAIR, last));
-    let specular = atrous::SPECULAR.of(svgf::iteration(atrous::PAIR, last));
+    let diffuse = atrous::DIFFUSE.of(svgf::iteration(svgf::PAIR, last));
+    let specular = atrous::SPECULAR.of(svgf::iteration(svgf::PAIR, last));
     let names = [passes::gbuffer::NORMAL_GEO, passes::gbuffer::IDS, diffuse, specular, passes::taa::COLOR];
     let imgs = r.read_outputs(&names).unwrap();
     let (ng, ids) = (&imgs[0], &imgs[1]);

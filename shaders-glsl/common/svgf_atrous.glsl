@@ -75,20 +75,21 @@ const float KERNEL[2] = float[2](1.0, 0.5);
 bool inside(ivec2 q) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size))); }
 
 // The variance prefilter beyond step 1: the same 3x3 Gaussian over the surface pixels around
-// px, loaded apart from the kernel's taps.
-float prefiltered_variance(int s, ivec2 px) {
-    float sum = load_signal(s, px).a, wsum = 1.0;
+// px, loaded apart from the kernel's taps, each neighbour's guide texel once for every signal.
+void prefilter_variance(ivec2 px, vec4 c_p[SIGNALS], out float variance[SIGNALS]) {
+    float wsum = 1.0;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] = c_p[s].a;
     [[unroll]] for (int i = 0; i < TAPS; ++i) {
         int j = i < 4 ? i : i + 1;
         ivec2 d = ivec2(j % 3, j / 3) - 1;
         ivec2 q = px + d;
         if (inside(q) && svgf_guide_surface(imageLoad(in_guide, q))) {
             float k = KERNEL[abs(d.x)] * KERNEL[abs(d.y)];
-            sum += k * load_signal(s, q).a;
+            [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] += k * load_signal(s, q).a;
             wsum += k;
         }
     }
-    return sum / wsum;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] /= wsum;
 }
 
 void main() {
@@ -146,9 +147,15 @@ void main() {
             }
         }
     }
+    float variance[SIGNALS];
+    if (svgf.step == 1) {
+        [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] = var_sum[s] / var_wsum;
+    } else {
+        prefilter_variance(px, c_p, variance);
+    }
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         float l = luminance(c_p[s].rgb);
-        float std_dev = sqrt(max(0.0, svgf.step == 1 ? var_sum[s] / var_wsum : prefiltered_variance(s, px)));
+        float std_dev = sqrt(max(0.0, variance[s]));
         // sigma_l = infinity switches luminance edge-stopping off (the impulse-response test).
         float inv_l_scale = isinf(svgf.sigma_l) ? 0.0 : 1.0 / (svgf.sigma_l * std_dev + 1e-6);
         vec4 sum = c_p[s];  // colour, and variance weighted by the squared weights

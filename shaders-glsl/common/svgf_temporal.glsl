@@ -1,5 +1,6 @@
-// svgf_temporal_<signal> (svgf_temporal.comp, svgf_temporal_specular.comp): temporal
-// accumulation of one demodulated signal (diffuse or specular). The
+// svgf_temporal (svgf_temporal.comp: one signal, svgf_temporal_<signal>;
+// svgf_temporal_diffuse_specular.comp: the frame's two, SVGF_PAIR): temporal accumulation of
+// demodulated signals. The
 // previous frame's filtered colour (the first a-trous iteration, copied by `history`), moments
 // and history length are reprojected through the motion vectors with bilinear taps that each
 // pass the validity test (on screen, same instance, depth, geometric normal); the new frame is blended in
@@ -21,7 +22,11 @@
 // own; one frame's samples are what a young history holds (all of it at a disocclusion), and
 // the window is loaded anyway.
 //
-// With SVGF_REFLECTION_MOTION defined (the specular chain behind the reflections pass) the
+// The pair accumulates diffuse and specular in one dispatch, because the pass is bound by its
+// loads: the G-buffer texels, the window's guide texels and, where the two histories are
+// fetched from the same place, the reprojection's validity tests are loaded once for both.
+//
+// With SVGF_SHARP_SPECULAR set (the pair's specular signal made of reflection rays) the
 // history of a narrow lobe is fetched where the reflected object was, not where the surface
 // was: the reflection of a point at hit distance d appears at the virtual point p + d view_dir
 // behind a mirror, and a moving camera sees it move with that point's parallax, not the
@@ -31,67 +36,117 @@
 #ifndef SVGF_TEMPORAL_GLSL
 #define SVGF_TEMPORAL_GLSL
 
+#extension GL_EXT_control_flow_attributes : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
 #include "common/reflection_motion.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 1, binding = 0, rgba32f) uniform readonly image2D in_signal;
-layout(set = 1, binding = 1, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
+layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 // The geometric (face) normal: reprojection asks whether the previous sample lies on the same
 // surface, and a crease that smooth vertex normals round off is still a different surface.
-layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
-layout(set = 1, binding = 3, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_motion;
-layout(set = 1, binding = 5, rg32f) uniform readonly image2D prev_depth;
-layout(set = 1, binding = 6, rgba16f) uniform readonly image2D prev_normal_geo;
-layout(set = 1, binding = 7, rg32ui) uniform readonly uimage2D prev_ids;
-layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_color;
-layout(set = 1, binding = 9, rg32f) uniform readonly image2D prev_moments;
-layout(set = 1, binding = 10, r32f) uniform readonly image2D prev_history_length;
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal_geo;
+layout(set = 1, binding = 2, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_motion;
+layout(set = 1, binding = 4, rg32f) uniform readonly image2D prev_depth;
+layout(set = 1, binding = 5, rgba16f) uniform readonly image2D prev_normal_geo;
+layout(set = 1, binding = 6, rg32ui) uniform readonly uimage2D prev_ids;
 // svgf_guide: shading normal and view depth (w < 0: no surface), for the spatial variance.
-layout(set = 1, binding = 11, rgba32f) uniform readonly image2D in_guide;
-#ifdef SVGF_REFLECTION_MOTION
-// reflections.hit_distance: mean distance to what the reflection rays hit (0: none traced).
-layout(set = 1, binding = 12, r32f) uniform readonly image2D in_hit_distance;
-layout(set = 1, binding = 13, rgba8) uniform readonly image2D g_metal_rough;
-#define SVGF_OUT 14  // outputs follow the inputs
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D in_guide;
+// Per signal: this frame's samples (rgba32f), the previous frame's filtered colour (the first
+// a-trous iteration's), moments and history length; then the outputs.
+#ifdef SVGF_PAIR
+#define SIGNALS 2
+layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_diffuse;
+layout(set = 1, binding = 9, rgba32f) uniform readonly image2D in_specular;
+layout(set = 1, binding = 10, rgba16f) uniform readonly image2D prev_diffuse;
+layout(set = 1, binding = 11, rgba16f) uniform readonly image2D prev_specular;
+layout(set = 1, binding = 12, rg32f) uniform readonly image2D prev_diffuse_moments;
+layout(set = 1, binding = 13, rg32f) uniform readonly image2D prev_specular_moments;
+layout(set = 1, binding = 14, r32f) uniform readonly image2D prev_diffuse_history_length;
+layout(set = 1, binding = 15, r32f) uniform readonly image2D prev_specular_history_length;
+// reflections.hit_distance: mean distance to what the reflection rays hit (0: none traced; a
+// zero image without SVGF_SHARP_SPECULAR).
+layout(set = 1, binding = 16, r32f) uniform readonly image2D in_hit_distance;
+layout(set = 1, binding = 17, rgba8) uniform readonly image2D g_metal_rough;
+layout(set = 1, binding = 18, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 19, rgba16f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 20, rg32f) uniform writeonly image2D out_diffuse_moments;
+layout(set = 1, binding = 21, rg32f) uniform writeonly image2D out_specular_moments;
+layout(set = 1, binding = 22, r32f) uniform writeonly image2D out_diffuse_history_length;
+layout(set = 1, binding = 23, r32f) uniform writeonly image2D out_specular_history_length;
+#define SVGF_OUT_REJECTED 24
+
+vec3 load_input(int s, ivec2 q) { return (s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)).rgb; }
+vec3 load_prev_color(int s, ivec2 q) { return (s == 0 ? imageLoad(prev_diffuse, q) : imageLoad(prev_specular, q)).rgb; }
+vec2 load_prev_moments(int s, ivec2 q) {
+    return (s == 0 ? imageLoad(prev_diffuse_moments, q) : imageLoad(prev_specular_moments, q)).xy;
+}
+float load_prev_history_length(int s, ivec2 q) {
+    return (s == 0 ? imageLoad(prev_diffuse_history_length, q) : imageLoad(prev_specular_history_length, q)).r;
+}
+void store(int s, ivec2 q, vec4 color, vec2 moments, float len) {
+    if (s == 0) {
+        imageStore(out_diffuse, q, color);
+        imageStore(out_diffuse_moments, q, vec4(moments, 0.0, 0.0));
+        imageStore(out_diffuse_history_length, q, vec4(len));
+    } else {
+        imageStore(out_specular, q, color);
+        imageStore(out_specular_moments, q, vec4(moments, 0.0, 0.0));
+        imageStore(out_specular_history_length, q, vec4(len));
+    }
+}
 #else
-#define SVGF_OUT 12
+#define SIGNALS 1
+layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_signal;
+layout(set = 1, binding = 9, rgba16f) uniform readonly image2D prev_color;
+layout(set = 1, binding = 10, rg32f) uniform readonly image2D prev_moments;
+layout(set = 1, binding = 11, r32f) uniform readonly image2D prev_history_length;
+layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 13, rg32f) uniform writeonly image2D out_moments;
+layout(set = 1, binding = 14, r32f) uniform writeonly image2D out_history_length;
+#define SVGF_OUT_REJECTED 15
+
+vec3 load_input(int s, ivec2 q) { return imageLoad(in_signal, q).rgb; }
+vec3 load_prev_color(int s, ivec2 q) { return imageLoad(prev_color, q).rgb; }
+vec2 load_prev_moments(int s, ivec2 q) { return imageLoad(prev_moments, q).xy; }
+float load_prev_history_length(int s, ivec2 q) { return imageLoad(prev_history_length, q).r; }
+void store(int s, ivec2 q, vec4 color, vec2 moments, float len) {
+    imageStore(out_color, q, color);
+    imageStore(out_moments, q, vec4(moments, 0.0, 0.0));
+    imageStore(out_history_length, q, vec4(len));
+}
 #endif
-layout(set = 1, binding = SVGF_OUT, rgba16f) uniform writeonly image2D out_color;
-layout(set = 1, binding = SVGF_OUT + 1, rg32f) uniform writeonly image2D out_moments;
-layout(set = 1, binding = SVGF_OUT + 2, r32f) uniform writeonly image2D out_history_length;
 // x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
-layout(set = 1, binding = SVGF_OUT + 3, r32ui) uniform uimage2D out_rejected;
+layout(set = 1, binding = SVGF_OUT_REJECTED, r32ui) uniform uimage2D out_rejected;
 
 #include "common/svgf.glsl"
 
-// The input sample with non-finite values removed (false when it was not finite).
-bool load_finite(ivec2 q, out vec3 c) {
-    c = imageLoad(in_signal, q).rgb;
+// Signal s's input sample with non-finite values removed (false when it was not finite).
+bool load_finite(int s, ivec2 q, out vec3 c) {
+    c = load_input(s, q);
     if (finite3(c)) return true;
     c = vec3(0.0);
     return false;
 }
 
-// What the 7x7 neighbourhood of this frame's samples says about pixel `px`.
+// What the 7x7 neighbourhood of this frame's samples says about pixel `px`, per signal.
 struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
-    float variance;     // the spatial variance estimate (computed only when asked for)
+    float variance;     // the spatial variance estimate (only for a young history)
     vec3 spread;        // this pixel's share of what the clamp takes out of its neighbours
-    vec3 blurred;       // the edge-aware mean of the clamped samples (only with `blur`)
+    vec3 blurred;       // the edge-aware mean of the clamped samples (only without history)
 };
 
-// One pass over the 7x7 neighbourhood (surface pixels only) for the outlier clamp's bound,
+// One pass over the 7x7 neighbourhood (surface pixels only), for each signal, for the outlier clamp's bound,
 // mean + k sigma of the luminance, which takes a firefly out of the history before anything
-// accumulates it; and, with `spatial`, the luminance variance around `l` (this pixel's
+// accumulates it; and, for a young history (`young`), the luminance variance around `l` (this pixel's
 // clamped luminance, which the luminance weight needs, so the clamp's bound is found first
 // and the window read twice only then) and, with `blur` (no history at all), the edge-aware
 // mean of the clamped samples on this pixel's instance.
 //
-// With `spread` (an established history) the clamp keeps the firefly's energy: each pixel
+// With an established history the clamp keeps the firefly's energy: each pixel
 // takes an even share of what the clamp takes out of the brightest neighbour on its own
 // surface (normal within 25 degrees, depth within 5%). A firefly's own window never holds it,
 // so its neighbours' bounds leave the window's brightest sample out too: they then bound it as
@@ -103,17 +158,33 @@ struct Neighbourhood {
 // An established history's bound is this many times wider: it averages what gets past, and
 // one window of one frame's samples is a poor judge of rare bright paths. Measured at 256x256
 // on the diffuse box, the frame after 64 frames held 0.956 of the reference's light with the
-// bound at 4 sigma and 0.974 at 8 (gi at full rate: 0.857 and 0.891).
-#define SVGF_ESTABLISHED_SIGMA_SCALE 2.0
+// bound at 4 sigma, 0.974 at 8 and 0.981 at 12 (gi at full rate: 0.857 and 0.891 at 4 and 8);
+// at 16 it held 0.979, the give-back then having less to spread.
+#define SVGF_ESTABLISHED_SIGMA_SCALE 3.0
 
-Neighbourhood neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c, bool spatial, bool spread, bool blur) {
-    Neighbourhood nb = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0), vec3(0.0));
+// The window is walked once for all signals: each tap's guide texel is loaded once. `young[s]`:
+// signal s's history is younger than SVGF_MOMENTS_FRAMES (7x7 window, spatial variance);
+// `blur[s]`: it has none at all (the window's mean too).
+void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], bool young[SIGNALS],
+                   bool blur[SIGNALS], out Neighbourhood nb[SIGNALS]) {
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
     bool clamped = !isinf(svgf.clamp_sigma);
-    float sum = 0.0, sum2 = 0.0, n = 0.0, brightest = 0.0, n_same = 0.0;
-    vec3 brightest_same = vec3(0.0);  // the brightest neighbour on this pixel's surface
-    float brightest_same_l = 0.0;
-    int radius = spread ? 2 : 3;  // the young history's spatial variance needs the 7x7 one
+    bool any_young = false, any_established = false, any_blur = false;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        nb[s] = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0), vec3(0.0));
+        any_young = any_young || young[s];
+        any_established = any_established || !young[s];
+        any_blur = any_blur || blur[s];
+    }
+    float sum[SIGNALS], sum2[SIGNALS], n[SIGNALS], brightest[SIGNALS], n_same[SIGNALS];
+    vec3 brightest_same[SIGNALS];  // the brightest neighbour on this pixel's surface
+    float brightest_same_l[SIGNALS];
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        sum[s] = sum2[s] = n[s] = brightest[s] = n_same[s] = brightest_same_l[s] = 0.0;
+        brightest_same[s] = vec3(0.0);
+    }
+    // A young history's window is 7x7 (its spatial variance needs it), an established one's 5x5.
+    int radius = any_young ? 3 : 2;
     for (int dy = -radius; dy <= radius && clamped; ++dy) {
         for (int dx = -radius; dx <= radius; ++dx) {
             // The centre is left out, so a lone firefly cannot widen its own bound.
@@ -121,157 +192,216 @@ Neighbourhood neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c, b
             ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
             vec4 gq = imageLoad(in_guide, q);
             if (!svgf_guide_surface(gq)) continue;
-            vec3 s;
-            load_finite(q, s);
-            float l = luminance(s);
-            sum += l;
-            sum2 += l * l;
-            n += 1.0;
-            brightest = max(brightest, l);
-            if (spread && dot(g.xyz, gq.xyz) > 0.9 && abs(gq.w - g.w) < 0.05 * g.w) {
-                n_same += 1.0;
-                if (l > brightest_same_l) {
-                    brightest_same_l = l;
-                    brightest_same = s;
+            bool inner = max(abs(dx), abs(dy)) <= 2;
+            bool same = any_established && dot(g.xyz, gq.xyz) > 0.9 && abs(gq.w - g.w) < 0.05 * g.w;
+            [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+                if (young[s] || inner) {
+                    vec3 v;
+                    load_finite(s, q, v);
+                    float l = luminance(v);
+                    sum[s] += l;
+                    sum2[s] += l * l;
+                    n[s] += 1.0;
+                    brightest[s] = max(brightest[s], l);
+                    if (!young[s] && same) {
+                        n_same[s] += 1.0;
+                        if (l > brightest_same_l[s]) {
+                            brightest_same_l[s] = l;
+                            brightest_same[s] = v;
+                        }
+                    }
                 }
             }
         }
     }
-    if (clamped) {
-        float trim = spread ? brightest : 0.0;
-        float m = max(n - (spread ? 1.0 : 0.0), 1.0);
-        float mean = (sum - trim) / m;
-        float k = spread ? SVGF_ESTABLISHED_SIGMA_SCALE * svgf.clamp_sigma : svgf.clamp_sigma;
-        nb.clamp_limit = mean + k * sqrt(max(0.0, (sum2 - trim * trim) / m - mean * mean));
-        if (brightest_same_l > nb.clamp_limit) {
-            nb.spread = brightest_same * (1.0 - nb.clamp_limit / brightest_same_l) / n_same;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        if (clamped) {
+            bool spread = !young[s];
+            float trim = spread ? brightest[s] : 0.0;
+            float m = max(n[s] - (spread ? 1.0 : 0.0), 1.0);
+            float mean = (sum[s] - trim) / m;
+            float k = spread ? SVGF_ESTABLISHED_SIGMA_SCALE * svgf.clamp_sigma : svgf.clamp_sigma;
+            nb[s].clamp_limit = mean + k * sqrt(max(0.0, (sum2[s] - trim * trim) / m - mean * mean));
+            if (brightest_same_l[s] > nb[s].clamp_limit) {
+                nb[s].spread = brightest_same[s] * (1.0 - nb[s].clamp_limit / brightest_same_l[s]) / n_same[s];
+            }
         }
     }
-    if (!spatial) return nb;
-    float l = min(luminance(c), nb.clamp_limit);
-    vec2 m = vec2(0.0);
-    vec3 blurred = vec3(0.0);
-    float wsum = 0.0, blur_wsum = 0.0;
+    if (!any_young) return;
+    float l[SIGNALS], wsum[SIGNALS], blur_wsum[SIGNALS];
+    vec2 m[SIGNALS];
+    vec3 blurred[SIGNALS];
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        l[s] = min(luminance(c[s]), nb[s].clamp_limit);
+        m[s] = vec2(0.0);
+        blurred[s] = vec3(0.0);
+        wsum[s] = blur_wsum[s] = 0.0;
+    }
     for (int dy = -3; dy <= 3; ++dy) {
         for (int dx = -3; dx <= 3; ++dx) {
             ivec2 q = px + ivec2(dx, dy);
             if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
             vec4 gq = imageLoad(in_guide, q);
             if (!svgf_guide_surface(gq)) continue;
-            vec3 s;
-            load_finite(q, s);
-            float lq_raw = luminance(s);
-            float lq = min(lq_raw, nb.clamp_limit);
             float inv_z_scale = 1.0 / (svgf.sigma_z * fwidth_z * length(vec2(dx, dy)) + 1e-4);
-            // The luminance weight uses a fixed scale: there is no variance to scale it yet.
-            float w = exp(-svgf_depth_exponent(g.w, gq.w, inv_z_scale) - svgf_normal_exponent(g.xyz, gq.xyz) -
-                          abs(l - lq) / svgf.sigma_l);
-            m += w * vec2(lq, lq * lq);
-            wsum += w;
-            if (blur && imageLoad(g_ids, q).x == id) {
-                blurred += w * (lq_raw > lq ? s * (lq / lq_raw) : s);
-                blur_wsum += w;
+            float e_geometry = svgf_depth_exponent(g.w, gq.w, inv_z_scale) + svgf_normal_exponent(g.xyz, gq.xyz);
+            bool same_instance = any_blur && imageLoad(g_ids, q).x == id;
+            [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+                if (young[s]) {
+                    vec3 v;
+                    load_finite(s, q, v);
+                    float lq_raw = luminance(v);
+                    float lq = min(lq_raw, nb[s].clamp_limit);
+                    // The luminance weight uses a fixed scale: there is no variance to scale it yet.
+                    float w = exp(-e_geometry - abs(l[s] - lq) / svgf.sigma_l);
+                    m[s] += w * vec2(lq, lq * lq);
+                    wsum[s] += w;
+                    if (blur[s] && same_instance) {
+                        blurred[s] += w * (lq_raw > lq ? v * (lq / lq_raw) : v);
+                        blur_wsum[s] += w;
+                    }
+                }
             }
         }
     }
-    m /= max(wsum, 1e-6);
-    nb.blurred = blurred / max(blur_wsum, 1e-6);
-    nb.variance = max(0.0, m.y - m.x * m.x);
-    return nb;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        if (young[s]) {
+            vec2 mean = m[s] / max(wsum[s], 1e-6);
+            nb[s].blurred = blurred[s] / max(blur_wsum[s], 1e-6);
+            nb[s].variance = max(0.0, mean.y - mean.x * mean.x);
+        }
+    }
 }
 
-#ifdef SVGF_REFLECTION_MOTION
 // A mirror's history is capped at this many frames, rising to svgf.history_cap at roughness
 // GLOSSY_CAP_ROUGHNESS.
 const float GLOSSY_HISTORY_CAP = 8.0;
 const float GLOSSY_CAP_ROUGHNESS = 0.5;
-#endif
+
+// The bilinear weights of the previous frame's four texels around `prev_pos` (continuous pixel
+// coordinates), zero for each that fails the validity test (svgf_consistent) against this
+// pixel's depth z, geometric normal ng and instance id.
+vec4 reprojection_weights(vec2 prev_pos, float z, float fw_tolerance, vec3 ng, uint id) {
+    vec2 base = floor(prev_pos - 0.5);
+    vec2 f = prev_pos - 0.5 - base;
+    vec4 w = vec4(0.0);
+    [[unroll]] for (int i = 0; i < 4; ++i) {
+        ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
+        if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size))) &&
+            svgf_consistent(z, imageLoad(prev_depth, q).r, fw_tolerance, ng, imageLoad(prev_normal_geo, q).xyz, id,
+                            imageLoad(prev_ids, q).x)) {
+            w[i] = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+        }
+    }
+    return w;
+}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     uint id = imageLoad(g_ids, px).x;
     if (id == NO_INSTANCE) {
-        imageStore(out_color, px, vec4(0.0));
-        imageStore(out_moments, px, vec4(0.0));
-        imageStore(out_history_length, px, vec4(0.0));
+        [[unroll]] for (int s = 0; s < SIGNALS; ++s) store(s, px, vec4(0.0), vec2(0.0), 0.0);
         return;
     }
-    vec3 c;
-    bool finite = load_finite(px, c);
-    if (!finite) imageAtomicAdd(out_rejected, ivec2(0), 1u);
+    vec3 c[SIGNALS];
+    bool finite[SIGNALS];
+    uint rejected = 0u;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        finite[s] = load_finite(s, px, c[s]);
+        if (!finite[s]) rejected += 1u;
+    }
+    if (rejected > 0u) imageAtomicAdd(out_rejected, ivec2(0), rejected);
 
     vec2 zf = imageLoad(g_depth, px).rg;
     float z = zf.x;
     vec3 ng = imageLoad(g_normal_geo, px).xyz;
     float fw = zf.y;
     // Where this pixel's surface was last frame, in continuous pixel coordinates.
-    vec2 prev_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
-    float cap = svgf.history_cap;
-    float footprint = 1.0;  // how much of the young sample's spatial mean stands for it
-    // The depth test's tolerance: fetched away from the surface's own motion (the virtual
-    // point's), the previous sample is on the same surface a few pixels off, where depth
-    // differs by about fwidth per pixel.
-    float fw_tolerance = fw;
-#ifdef SVGF_REFLECTION_MOTION
-    float roughness = imageLoad(g_metal_rough, px).y;
-    float hit = imageLoad(in_hit_distance, px).r;
-    float virtual_weight = reflection_motion_weight(roughness);
-    if (hit > 0.0 && virtual_weight > 0.0) {
-        vec2 surface_pos = prev_pos;
-        prev_pos = mix(prev_pos, reflection_prev_pos(px, z, hit), virtual_weight);
-        fw_tolerance = fw * (1.0 + distance(prev_pos, surface_pos));
+    vec2 surface_pos = vec2(px) + 0.5 - imageLoad(g_motion, px).xy;
+    vec2 prev_pos[SIGNALS];
+    float cap[SIGNALS], footprint[SIGNALS], fw_tolerance[SIGNALS];
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        prev_pos[s] = surface_pos;
+        cap[s] = svgf.history_cap;
+        footprint[s] = 1.0;  // how much of the young sample's spatial mean stands for it
+        fw_tolerance[s] = fw;
     }
-    cap = mix(GLOSSY_HISTORY_CAP, cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
-    footprint = svgf_footprint(roughness);
+#ifdef SVGF_PAIR
+    if ((svgf.flags & SVGF_SHARP_SPECULAR) != 0u) {
+        float roughness = imageLoad(g_metal_rough, px).y;
+        float hit = imageLoad(in_hit_distance, px).r;
+        float virtual_weight = reflection_motion_weight(roughness);
+        if (hit > 0.0 && virtual_weight > 0.0) {
+            prev_pos[1] = mix(surface_pos, reflection_prev_pos(px, z, hit), virtual_weight);
+            // The depth test's tolerance: fetched away from the surface's own motion (the
+            // virtual point's), the previous sample is on the same surface a few pixels off,
+            // where depth differs by about fwidth per pixel.
+            fw_tolerance[1] = fw * (1.0 + distance(prev_pos[1], surface_pos));
+        }
+        cap[1] = mix(GLOSSY_HISTORY_CAP, svgf.history_cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
+        footprint[1] = svgf_footprint(roughness);
+    }
 #endif
-    vec2 base = floor(prev_pos - 0.5);
-    vec2 f = prev_pos - 0.5 - base;
-    vec3 hist_c = vec3(0.0);
-    vec2 hist_m = vec2(0.0);
-    float hist_len = 0.0, wsum = 0.0;
     // A camera cut, or lights that changed since last frame: the history holds light that is
     // gone (the lag a lit history would add is the whole accumulation window).
     bool reset = (frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u;
-    for (int i = 0; i < 4 && !reset; ++i) {
-        ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
-        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
-        if (!svgf_consistent(z, imageLoad(prev_depth, q).r, fw_tolerance, ng, imageLoad(prev_normal_geo, q).xyz, id,
-                             imageLoad(prev_ids, q).x)) continue;
-        float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
-        hist_c += w * imageLoad(prev_color, q).rgb;
-        hist_m += w * imageLoad(prev_moments, q).xy;
-        hist_len += w * imageLoad(prev_history_length, q).r;
-        wsum += w;
+    vec4 tap_w[SIGNALS];
+    bool young[SIGNALS], blur[SIGNALS];
+    float len[SIGNALS];
+    vec3 hist_c[SIGNALS];
+    vec2 hist_m[SIGNALS];
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        // A history fetched from where the other's was shares its validity tests.
+        if (reset) tap_w[s] = vec4(0.0);
+        else if (s > 0 && prev_pos[s] == prev_pos[0] && fw_tolerance[s] == fw_tolerance[0]) tap_w[s] = tap_w[0];
+        else tap_w[s] = reprojection_weights(prev_pos[s], z, fw_tolerance[s], ng, id);
+        vec2 base = floor(prev_pos[s] - 0.5);
+        hist_c[s] = vec3(0.0);
+        hist_m[s] = vec2(0.0);
+        float hist_len = 0.0;
+        [[unroll]] for (int i = 0; i < 4; ++i) {
+            if (tap_w[s][i] > 0.0) {
+                ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
+                hist_c[s] += tap_w[s][i] * load_prev_color(s, q);
+                hist_m[s] += tap_w[s][i] * load_prev_moments(s, q);
+                hist_len += tap_w[s][i] * load_prev_history_length(s, q);
+            }
+        }
+        float wsum = dot(tap_w[s], vec4(1.0));
+        blur[s] = wsum <= 1e-3;  // nothing reprojects
+        if (!blur[s]) {
+            hist_c[s] /= wsum;
+            hist_m[s] /= wsum;
+        }
+        len[s] = blur[s] ? 1.0 : min(hist_len / wsum + 1.0, cap[s]);
+        young[s] = len[s] < SVGF_MOMENTS_FRAMES;
     }
-    bool reprojected = wsum > 1e-3;
-    float len = reprojected ? min(hist_len / wsum + 1.0, cap) : 1.0;
-    Neighbourhood nb = neighbourhood(px, imageLoad(in_guide, px), id, fw, c, len < SVGF_MOMENTS_FRAMES,
-                                     len >= SVGF_MOMENTS_FRAMES, !reprojected);
-    float l = luminance(c);
-    if (l > nb.clamp_limit && l > 0.0) c *= nb.clamp_limit / l;
-    c += nb.spread;
-    // No history at all (a disocclusion, a camera cut, changed lights): the sample is replaced
-    // by the edge-aware mean of its 7x7 window on the same instance, which the variance
-    // estimate has weighed anyway, so the a-trous iterations start from less noise. A narrow
-    // lobe's reflection keeps its sharpness (svgf_footprint, as in the a-trous filter).
-    if (!reprojected && finite) c = mix(c, nb.blurred, footprint);
-    l = luminance(c);
-    vec2 moments = vec2(l, l * l);
-    if (reprojected) {
-        hist_c /= wsum;
-        hist_m /= wsum;
-        float a = max(svgf.alpha, 1.0 / len);
-        float am = max(svgf.moments_alpha, 1.0 / len);
-        // A dropped (non-finite) sample leaves the history as it was.
-        c = finite ? mix(hist_c, c, a) : hist_c;
-        moments = finite ? mix(hist_m, moments, am) : hist_m;
+    Neighbourhood nb[SIGNALS];
+    neighbourhood(px, imageLoad(in_guide, px), id, fw, c, young, blur, nb);
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        vec3 cs = c[s];
+        float l = luminance(cs);
+        if (l > nb[s].clamp_limit && l > 0.0) cs *= nb[s].clamp_limit / l;
+        cs += nb[s].spread;
+        // No history at all (a disocclusion, a camera cut, changed lights): the sample is
+        // replaced by the edge-aware mean of its 7x7 window on the same instance, which the
+        // variance estimate has weighed anyway, so the a-trous iterations start from less
+        // noise. A narrow lobe's reflection keeps its sharpness (svgf_footprint, as in the
+        // a-trous filter).
+        if (blur[s] && finite[s]) cs = mix(cs, nb[s].blurred, footprint[s]);
+        l = luminance(cs);
+        vec2 moments = vec2(l, l * l);
+        if (!blur[s]) {
+            float a = max(svgf.alpha, 1.0 / len[s]);
+            float am = max(svgf.moments_alpha, 1.0 / len[s]);
+            // A dropped (non-finite) sample leaves the history as it was.
+            cs = finite[s] ? mix(hist_c[s], cs, a) : hist_c[s];
+            moments = finite[s] ? mix(hist_m[s], moments, am) : hist_m[s];
+        }
+        float variance = young[s] ? nb[s].variance * 4.0 / len[s] : max(0.0, moments.y - moments.x * moments.x);
+        store(s, px, svgf_pack(cs, variance), moments, len[s]);
     }
-    float variance = len >= SVGF_MOMENTS_FRAMES ? max(0.0, moments.y - moments.x * moments.x)
-                                                : nb.variance * 4.0 / len;
-    imageStore(out_color, px, svgf_pack(c, variance));
-    imageStore(out_moments, px, vec4(moments, 0.0, 0.0));
-    imageStore(out_history_length, px, vec4(len));
 }
 
 #endif

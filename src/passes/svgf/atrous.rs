@@ -4,7 +4,7 @@
 //! each tap's guide texel and depth and normal weights; any other signal on its own,
 //! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
-use super::{COLOR_FORMAT, SvgfSettings, guide, iteration, temporal};
+use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, guide, iteration, temporal};
 use crate::graph::{Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
@@ -12,8 +12,6 @@ use crate::passes::gbuffer;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_atrous";
-/// The run name of the pair's iterations (`svgf_atrous_diffuse_specular_0`).
-pub const PAIR: &str = "diffuse_specular";
 /// A lone signal's filtered colour, its luminance's standard deviation in alpha
 /// (`COLOR.of(svgf::iteration(signal, i))`).
 pub const COLOR: Output = Output::new(NAME, "color");
@@ -41,16 +39,17 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
 /// Iteration `i` of the frame's diffuse and specular signals. `sharp_specular`: the specular
 /// signal is made of reflection rays, whose narrow lobes keep their sharpness.
 pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> Result<FullscreenPass> {
+    let pair = super::signal(PAIR);
     let (diffuse, specular) = if i == 0 {
-        (temporal::COLOR.of(super::signal("diffuse")), temporal::COLOR.of(super::signal("specular")))
+        (temporal::DIFFUSE.of(pair), temporal::SPECULAR.of(pair))
     } else {
         (DIFFUSE.of(iteration(PAIR, i - 1)), SPECULAR.of(iteration(PAIR, i - 1)))
     };
     let inputs = vec![
         Input::texel(diffuse).bound_as("in_diffuse"),
         Input::texel(specular).bound_as("in_specular"),
-        Input::texel(temporal::HISTORY_LENGTH.of(super::signal("diffuse"))).bound_as("in_diffuse_history_length"),
-        Input::texel(temporal::HISTORY_LENGTH.of(super::signal("specular"))).bound_as("in_specular_history_length"),
+        Input::texel(temporal::DIFFUSE_HISTORY_LENGTH.of(pair)),
+        Input::texel(temporal::SPECULAR_HISTORY_LENGTH.of(pair)),
         Input::texel(guide::GUIDE),
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::METAL_ROUGH),
@@ -65,6 +64,3 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
     let shader = "svgf_atrous_diffuse_specular.comp";
     FullscreenPass::new(b, &DIFFUSE.of(run).pass_name(), shader, inputs, outputs, &push)
 }
-
-/// common/svgf.glsl's SVGF_SHARP_SPECULAR.
-const SHARP_SPECULAR: u32 = 1;

@@ -1,10 +1,11 @@
 //! SVGF (Schied et al. 2017, with Falcor's defaults): spatiotemporal variance-guided filtering
 //! of demodulated signals, as a chain of passes. The frame's diffuse and specular signals:
 //!
-//! `svgf_temporal_<signal>` (each signal; its colour carries the luminance's deviation in alpha) ->
-//! `svgf_atrous_diffuse_specular_0` ... `_<n-1>` (both at once)
+//! `svgf_temporal_diffuse_specular` (each signal's colour carries the luminance's deviation in
+//! alpha) -> `svgf_atrous_diffuse_specular_0` ... `_<n-1>`, each stage filtering both at once,
 //!
-//! and a lone signal (the tests' injected one) the same with `svgf_atrous_<signal>_<i>`. Each
+//! and a lone signal (the tests' injected one) the same with `svgf_temporal_<signal>` and
+//! `svgf_atrous_<signal>_<i>`. Each
 //! stage is a pass instance with its own named outputs, so `--dump-passes` shows the chain step
 //! by step. The first a-trous iteration's colour, and the temporal moments and history length,
 //! are kept for the next frame by the `history` pass. `svgf_guide` packs what the a-trous
@@ -17,7 +18,7 @@ pub mod temporal;
 use super::PassBuilder;
 use super::history::Kept;
 use crate::gpu::vk;
-use crate::graph::{Instance, Output, Pass, Preview, Resource};
+use crate::graph::{Instance, Output, Pass, Resource};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
@@ -25,6 +26,14 @@ use bytemuck::{Pod, Zeroable};
 /// precision, the standard deviation of the luminance in alpha (`svgf_pack` in
 /// common/svgf.glsl says why).
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+/// The run name of the pair's stages (`svgf_temporal_diffuse_specular`,
+/// `svgf_atrous_diffuse_specular_0`).
+pub const PAIR: &str = "diffuse_specular";
+
+/// common/svgf.glsl's SVGF_SHARP_SPECULAR: the pair's specular signal is made of reflection
+/// rays (a narrow lobe's history follows the reflected object, its filter keeps it sharp).
+const SHARP_SPECULAR: u32 = 1;
 
 /// The default of `SvgfSettings::converged`.
 const CONVERGED: f32 = 0.05;
@@ -114,8 +123,8 @@ pub struct Chain {
     pub kept: Vec<Kept>,
 }
 
-/// The temporal stage of the chain of `signal` (`svgf_temporal_diffuse`):
-/// `temporal::COLOR.of(svgf::signal("diffuse"))`.
+/// The temporal stage of the chain of `signal` (`svgf_temporal_signal`, or of the pair,
+/// `svgf_temporal_diffuse_specular`): `temporal::COLOR.of(svgf::signal("signal"))`.
 pub const fn signal(signal: &'static str) -> Instance {
     Instance { signal: Some(signal), iteration: None }
 }
@@ -128,7 +137,7 @@ pub const fn iteration(signal: &'static str, i: u32) -> Instance {
 
 /// The frame's chains: the demodulated RGBA32F `diffuse` and `specular` signals, filtered
 /// together by the a-trous iterations. `hit_distance` when the specular signal is made of
-/// reflection rays (see [`temporal::new`]); their narrow lobes then also keep their sharpness.
+/// reflection rays (see [`temporal::pair`]); their narrow lobes then also keep their sharpness.
 pub fn pair(
     b: &PassBuilder,
     diffuse: Resource,
@@ -137,43 +146,42 @@ pub fn pair(
     s: &SvgfSettings,
 ) -> Result<Chain> {
     let iterations = s.iterations.max(1);
-    let first = iteration(atrous::PAIR, 0);
-    let signals = [
-        ("diffuse", diffuse, atrous::DIFFUSE.of(first), None),
-        ("specular", specular, atrous::SPECULAR.of(first), hit_distance),
-    ];
-    let mut passes: Vec<Box<dyn Pass>> = Vec::new();
-    let mut kept = Vec::new();
-    for (name, input, filtered, hit_distance) in signals {
-        passes.push(Box::new(temporal::new(b, name, input, filtered, hit_distance, s)?));
-        kept.extend(keep(name, filtered));
-    }
+    let first = iteration(PAIR, 0);
+    let filtered = [atrous::DIFFUSE.of(first), atrous::SPECULAR.of(first)];
+    let mut passes: Vec<Box<dyn Pass>> =
+        vec![Box::new(temporal::pair(b, (diffuse, specular), filtered, hit_distance, s)?)];
     for i in 0..iterations {
         passes.push(Box::new(atrous::pair(b, i, hit_distance.is_some(), s)?));
     }
-    let last = iteration(atrous::PAIR, iterations - 1);
-    Ok(Chain { passes, outputs: vec![atrous::DIFFUSE.of(last), atrous::SPECULAR.of(last)], kept })
+    let run = signal(PAIR);
+    let kept = [
+        [filtered[0], temporal::DIFFUSE_MOMENTS.of(run), temporal::DIFFUSE_HISTORY_LENGTH.of(run)],
+        [filtered[1], temporal::SPECULAR_MOMENTS.of(run), temporal::SPECULAR_HISTORY_LENGTH.of(run)],
+    ];
+    let last = iteration(PAIR, iterations - 1);
+    Ok(Chain {
+        passes,
+        outputs: vec![atrous::DIFFUSE.of(last), atrous::SPECULAR.of(last)],
+        kept: kept.into_iter().flat_map(keep).collect(),
+    })
 }
 
 /// The chain of one demodulated RGBA32F signal, `input`, under the name `signal`.
 pub fn single(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSettings) -> Result<Chain> {
     let iterations = s.iterations.max(1);
     let filtered = atrous::COLOR.of(iteration(signal, 0));
-    let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(temporal::new(b, signal, input, filtered, None, s)?)];
+    let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(temporal::single(b, signal, input, filtered, s)?)];
     for i in 0..iterations {
         passes.push(Box::new(atrous::single(b, signal, i, s)?));
     }
     let outputs = vec![atrous::COLOR.of(iteration(signal, iterations - 1))];
-    Ok(Chain { passes, outputs, kept: keep(signal, filtered).to_vec() })
+    let run = self::signal(signal);
+    let kept = keep([filtered, temporal::MOMENTS.of(run), temporal::HISTORY_LENGTH.of(run)]);
+    Ok(Chain { passes, outputs, kept: kept.to_vec() })
 }
 
-/// What the next frame's temporal stage of `signal` reprojects: the first a-trous colour, the
-/// moments, the history length.
-fn keep(signal: &'static str, filtered: Output) -> [Kept; 3] {
-    let run = self::signal(signal);
-    [
-        Kept::new(filtered, COLOR_FORMAT, Preview::Color),
-        Kept::new(temporal::MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
-        Kept::new(temporal::HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
-    ]
+/// What the next frame's temporal stage of a signal reprojects: its first a-trous colour, its
+/// moments, its history length.
+fn keep(images: [Output; 3]) -> [Kept; 3] {
+    std::array::from_fn(|k| Kept::new(images[k], temporal::FORMATS[k], temporal::PREVIEWS[k]))
 }

@@ -1,46 +1,67 @@
-//! svgf_temporal_<signal>: reprojected temporal accumulation of colour and luminance moments
-//! with a history length, and the colour's luminance deviation (from the moments, or a 7x7
-//! spatial estimate while the history is young) in its alpha (shaders-glsl/svgf_temporal.comp).
-//! The specular chain behind the reflections pass reprojects a narrow lobe's history from the
-//! reflected object's virtual position instead (svgf_temporal_specular.comp,
-//! common/svgf_temporal.glsl).
+//! svgf_temporal: reprojected temporal accumulation of colour and luminance moments with a
+//! history length, and the colour's luminance deviation (from the moments, or a 7x7 spatial
+//! estimate while the history is young) in its alpha (shaders-glsl/common/svgf_temporal.glsl).
+//! The frame's diffuse and specular signals are accumulated together,
+//! `svgf_temporal_diffuse_specular` (svgf_temporal_diffuse_specular.comp), sharing the G-buffer's
+//! and the outlier window's loads; when the specular signal is made of reflection rays, a
+//! narrow lobe's history is reprojected from the reflected object's virtual position. Any other
+//! signal on its own, `svgf_temporal_<signal>` (svgf_temporal.comp).
 
-use super::{COLOR_FORMAT, SvgfSettings, guide, signal};
+use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, guide, signal};
 use crate::gpu::vk;
-use crate::graph::{Output, OutputDesc, Preview, Resource};
+use crate::graph::{self, Instance, Output, OutputDesc, Preview, Resource};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
 use crate::passes::gbuffer;
 use crate::passes::history;
+use crate::passes::reflections;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_temporal";
-/// The accumulated colour in rgb, its luminance's standard deviation in alpha (`svgf_pack`): each
-/// a-trous tap loads one texel for both (of one chain: `COLOR.of(svgf::signal(signal))`).
+/// A lone signal's accumulated colour in rgb, its luminance's standard deviation in alpha
+/// (`svgf_pack`): each a-trous tap loads one texel for both (`COLOR.of(svgf::signal(signal))`).
 pub const COLOR: Output = Output::new(NAME, "color");
-/// First and second moments of the luminance.
+/// A lone signal's first and second moments of the luminance.
 pub const MOMENTS: Output = Output::new(NAME, "moments");
-/// Frames accumulated.
+/// A lone signal's frames accumulated.
 pub const HISTORY_LENGTH: Output = Output::new(NAME, "history_length");
-/// Non-finite input samples caught since the first frame (texel 0,0).
+/// The pair's accumulated diffuse colour, as `COLOR` (`DIFFUSE.of(svgf::signal(PAIR))`).
+pub const DIFFUSE: Output = Output::new(NAME, "diffuse");
+/// The pair's accumulated specular colour, as `COLOR`.
+pub const SPECULAR: Output = Output::new(NAME, "specular");
+pub const DIFFUSE_MOMENTS: Output = Output::new(NAME, "diffuse_moments");
+pub const SPECULAR_MOMENTS: Output = Output::new(NAME, "specular_moments");
+pub const DIFFUSE_HISTORY_LENGTH: Output = Output::new(NAME, "diffuse_history_length");
+pub const SPECULAR_HISTORY_LENGTH: Output = Output::new(NAME, "specular_history_length");
+/// Non-finite input samples caught since the first frame (texel 0,0), of every signal.
 pub const REJECTED: Output = Output::new(NAME, "rejected");
 
-/// `input` is the signal to filter (bound as `in_signal`); `filtered`, the chain's first
-/// a-trous output for this signal, whose previous frame is the colour history. `hit_distance`,
-/// where the signal is made of reflection rays (`reflections::HIT_DISTANCE`): their mean hit
-/// distance, which moves a narrow lobe's history with the reflected object rather than the
-/// surface.
-pub fn new(
-    b: &PassBuilder,
-    signal_name: &'static str,
-    input: Resource,
+/// The formats of a signal's accumulated colour, moments and history length.
+pub const FORMATS: [vk::Format; 3] = [COLOR_FORMAT, vk::Format::R32G32_SFLOAT, vk::Format::R32_SFLOAT];
+/// How the dumps show them.
+pub const PREVIEWS: [Preview; 3] = [Preview::Color, Preview::Scalar, Preview::Scalar];
+
+/// One signal's images: what it accumulates this frame and writes.
+struct Signal {
+    /// This frame's samples.
+    input: Input,
+    /// The chain's first a-trous output, whose previous frame is the colour history.
     filtered: Output,
-    hit_distance: Option<Resource>,
-    s: &SvgfSettings,
-) -> Result<FullscreenPass> {
-    let run = signal(signal_name);
-    let mut inputs = vec![
-        Input::texel(input).bound_as("in_signal"),
+    /// Colour, moments, history length.
+    outputs: [Output; 3],
+}
+
+impl Signal {
+    /// What the previous frame left of output `k`: the filtered colour, the moments, the length.
+    fn previous(&self, k: usize) -> Output {
+        if k == 0 { self.filtered } else { self.outputs[k] }
+    }
+}
+
+/// The G-buffer and guide inputs every variant reads first (common/svgf_temporal.glsl's
+/// bindings 0-7).
+fn geometry() -> Vec<Input> {
+    vec![
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::NORMAL_GEO),
         Input::texel(gbuffer::IDS),
@@ -48,22 +69,86 @@ pub fn new(
         Input::texel(history::of(gbuffer::DEPTH)),
         Input::texel(history::of(gbuffer::NORMAL_GEO)),
         Input::texel(history::of(gbuffer::IDS)),
-        Input::texel(history::of(filtered)).bound_as("prev_color"),
-        Input::texel(history::of(MOMENTS.of(run))),
-        Input::texel(history::of(HISTORY_LENGTH.of(run))),
         Input::texel(guide::GUIDE),
-    ];
-    let mut shader = "svgf_temporal.comp".to_string();
-    if let Some(hit_distance) = hit_distance {
-        shader = format!("{}.comp", COLOR.of(run).pass_name());
-        inputs.extend([Input::texel(hit_distance).bound_as("in_hit_distance"), Input::texel(gbuffer::METAL_ROUGH)]);
+    ]
+}
+
+/// Per signal: the input, then (after all inputs) the previous colour, moments and length,
+/// then the outputs; `run` names the pass.
+fn pass(
+    b: &PassBuilder,
+    run: Instance,
+    shader: &str,
+    signals: &[Signal],
+    extra: Vec<Input>,
+    s: &SvgfSettings,
+    flags: u32,
+) -> Result<FullscreenPass> {
+    let mut inputs = geometry();
+    inputs.extend(signals.iter().map(|x| x.input.clone()));
+    for k in 0..3 {
+        inputs.extend(signals.iter().map(|x| Input::texel(history::of(x.previous(k)))));
     }
-    let outputs = vec![
-        OutputDesc::storage(COLOR.of(run), COLOR_FORMAT, Preview::Color),
-        OutputDesc::storage(MOMENTS.of(run), vk::Format::R32G32_SFLOAT, Preview::Scalar),
-        OutputDesc::storage(HISTORY_LENGTH.of(run), vk::Format::R32_SFLOAT, Preview::Scalar),
-        OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
+    inputs.extend(extra);
+    let mut outputs = Vec::new();
+    for (k, (format, preview)) in FORMATS.into_iter().zip(PREVIEWS).enumerate() {
+        outputs.extend(signals.iter().map(|x| OutputDesc::storage(x.outputs[k], format, preview)));
+    }
+    outputs.push(OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1));
+    let push = s.push_constants(0, flags);
+    FullscreenPass::new(b, &REJECTED.of(run).pass_name(), shader, inputs, outputs, &push)
+}
+
+/// The temporal stage of one signal, `input`, under the name `signal_name`; `filtered`, the
+/// chain's first a-trous output.
+pub fn single(
+    b: &PassBuilder,
+    signal_name: &'static str,
+    input: Resource,
+    filtered: Output,
+    s: &SvgfSettings,
+) -> Result<FullscreenPass> {
+    let run = signal(signal_name);
+    let one = Signal {
+        input: Input::texel(input).bound_as("in_signal"),
+        filtered,
+        outputs: [COLOR.of(run), MOMENTS.of(run), HISTORY_LENGTH.of(run)],
+    };
+    pass(b, run, "svgf_temporal.comp", &[one], Vec::new(), s, 0)
+}
+
+/// The temporal stage of the frame's `diffuse` and `specular` signals; `filtered`, the
+/// chain's first a-trous outputs of each. `hit_distance`, where the specular signal is made of
+/// reflection rays (`reflections::HIT_DISTANCE`): their mean hit distance, which moves a narrow
+/// lobe's history with the reflected object rather than the surface.
+pub fn pair(
+    b: &PassBuilder,
+    (diffuse, specular): (Resource, Resource),
+    filtered: [Output; 2],
+    hit_distance: Option<Resource>,
+    s: &SvgfSettings,
+) -> Result<FullscreenPass> {
+    let run = signal(PAIR);
+    let signals = [
+        Signal {
+            input: Input::texel(diffuse).bound_as("in_diffuse"),
+            filtered: filtered[0],
+            outputs: [DIFFUSE.of(run), DIFFUSE_MOMENTS.of(run), DIFFUSE_HISTORY_LENGTH.of(run)],
+        },
+        Signal {
+            input: Input::texel(specular).bound_as("in_specular"),
+            filtered: filtered[1],
+            outputs: [SPECULAR.of(run), SPECULAR_MOMENTS.of(run), SPECULAR_HISTORY_LENGTH.of(run)],
+        },
     ];
-    let push = s.push_constants(0, 0);
-    FullscreenPass::new(b, &COLOR.of(run).pass_name(), &shader, inputs, outputs, &push)
+    let hit = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
+    let extra = vec![
+        match hit_distance {
+            Some(h) => hit.reading(h),
+            None => hit.reading(graph::zero(vk::Format::R32_SFLOAT, false)),
+        },
+        Input::texel(gbuffer::METAL_ROUGH),
+    ];
+    let flags = if hit_distance.is_some() { SHARP_SPECULAR } else { 0 };
+    pass(b, run, "svgf_temporal_diffuse_specular.comp", &signals, extra, s, flags)
 }
