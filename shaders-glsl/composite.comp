@@ -44,11 +44,11 @@ void main() {
     vec3 n = imageLoad(g_normal, px).xyz;
     vec3 v = normalize(frame.camera_pos - p);
     vec4 mr = imageLoad(g_metal_rough, px);
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
+    MaterialInfo mi = materials[ids.y];
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, dielectric_f0(mi.ior));
 
     // Glass lets the share `transmission` of its diffuse light through instead (reflections
     // adds what comes through).
-    MaterialInfo mi = materials[ids.y];
     float transmission = mr.w;
     // A blended surface covers the share alpha of the pixel; reflections adds what shows
     // through the rest.

@@ -99,14 +99,14 @@ void shade(ivec2 px) {
     bool rough = has_rough(px);
     bool diffuse = has_diffuse(px);
     bool resampled = resampled_lights_present();
-    uint id = imageLoad(g_ids, px).x;
-    if (id == NO_INSTANCE || !(diffuse || rough || resampled)) {
+    uvec2 ids = imageLoad(g_ids, px).xy;
+    if (ids.x == NO_INSTANCE || !(diffuse || rough || resampled)) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
         if (resampled) imageStore(out_reservoir, px, reservoir_pack(reservoir_empty()));
         return;
     }
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, dielectric_f0(materials[ids.y].ior));
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
     float depth = imageLoad(g_depth, px).r;
     vec3 n = imageLoad(g_normal, px).xyz;
@@ -133,7 +133,7 @@ void shade(ivec2 px) {
     LightReservoir prev = reservoir_empty();
     if (resampled) {
         r = reservoir_candidates(sp, rng);
-        prev = previous_reservoir(px, id, depth, ng, sp);
+        prev = previous_reservoir(px, ids.x, depth, ng, sp);
     }
     NeeSample chosen = nee_none();  // the resampled light's sample, once found visible
     [[dont_unroll]] for (uint k = 0u; k < 3u; ++k) {

@@ -155,14 +155,14 @@ void main() {
     vec3 p = world_position(px, depth);
     vec3 v = -camera_ray_dir(vec2(px) + 0.5 - frame.jitter);
     vec4 mr = imageLoad(g_metal_rough, px);
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, GLTF_DIELECTRIC_F0);
+    MaterialInfo mi = materials[imageLoad(g_ids, px).y];
+    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, dielectric_f0(mi.ior));
     vec3 f0 = brdf_f0(m);
     float n_dot_v = max(dot(n, v), 1e-4);
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
 
     // Glass: what it lets through joins the specular signal (composite leaves its share out of
     // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
-    MaterialInfo mi = materials[imageLoad(g_ids, px).y];
     float transmitted = mr.w * (1.0 - m.metallic);
     vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng) : vec3(0.0);
     // A blended surface covers the share alpha of the pixel (composite scales its own light by

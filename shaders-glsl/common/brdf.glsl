@@ -60,12 +60,12 @@ struct BrdfInput {
     vec3 base_color;
     float metallic;
     float roughness;
-    // The dielectric's reflectance at normal incidence: glTF's 0.04 (IOR 1.5), or
-    // dielectric_f0(ior) where KHR_materials_ior is read (the reference path tracer).
+    // The dielectric's reflectance at normal incidence, dielectric_f0 of the material's IOR
+    // (KHR_materials_ior; glTF's 0.04 at the default 1.5) in every pass and the reference.
     float dielectric_f0;
 };
 
-// glTF's dielectric F0 without KHR_materials_ior.
+// glTF's dielectric F0 without KHR_materials_ior (the brdf tests' harness).
 #define GLTF_DIELECTRIC_F0 0.04
 
 float dielectric_f0(float ior) {

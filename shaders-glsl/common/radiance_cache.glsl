@@ -226,12 +226,11 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     for (uint vertex = 0u; vertex < vertices; ++vertex) {
-        // The G-buffer carries no IOR: the hybrid frame's paths use glTF's F0 throughout.
         // Glass reflects only the light it does not let through: its diffuse lobe shrinks by
         // the transmitted share (exactly so for a dielectric; a transmissive metal's F0 tint
         // shrinks with it). What it lets through is not followed on these paths.
         vec3 base = s.mat.base_color.rgb * (1.0 - s.mat.transmission);
-        BrdfInput m = BrdfInput(base, s.mat.metallic, s.mat.roughness, GLTF_DIELECTRIC_F0);
+        BrdfInput m = BrdfInput(base, s.mat.metallic, s.mat.roughness, dielectric_f0(s.mat.ior));
         vec3 v = -dir;
         vec3 leave = offset_ray(s.position, s.normal_geo);
         vec3 f;
