@@ -98,6 +98,7 @@ pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
     ("moving object", moving_object),
     ("moving light", moving_light),
     ("light off", light_off),
+    ("gliding light", gliding_light),
     ("leaking", leaking),
     ("cache leak", cache_leak),
     ("grazing floor", grazing_floor),
@@ -437,6 +438,37 @@ pub fn light_off(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
         measure("first frame: step missing", "fraction", first, if denoised { 0.095 } else { 0.05 }),
         measure("lag (within 10% of the step)", "frames", lag, if denoised { 2.0 } else { 0.0 }),
     ])
+}
+
+/// **Gliding light** in `stability-lights-sweep` (without the light `switched`): the point
+/// light `mover` glides across the white room, 6 cm a frame, so the light differs in every
+/// frame. Metric: the relative mean absolute luminance error of frames 9..16 of the glide,
+/// each against the mean of 8 raw frames at its own pose (noise, and light the history holds
+/// back), averaged.
+pub fn gliding_light(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    use lights_facts::*;
+    let scene = || {
+        let mut s = scenes::lights_sweep();
+        s.lights.retain(|l| l.name != SWITCHED);
+        s
+    };
+    let start = SWEEP_START - WARM_UP as f32 * FRAME_DT;
+    let mut r = renderer(rig, scene(), denoised, start, 0)?;
+    for _ in 0..WARM_UP + 8 {
+        r.render_frame()?;
+    }
+    let mut errors = Vec::new();
+    for _ in 0..8 {
+        let time = r.time_of(r.frame_index);
+        let lum = next_luminance(&mut r)?;
+        let mut still = renderer(rig, scene(), false, time, 0)?;
+        still.set_time(Some(time));
+        let truth = mean_of_frames(&mut still, 8)?;
+        errors.push(relative_error(&lum, &truth, |_| true));
+    }
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    log::debug!("gliding light: errors {errors:.4?}");
+    Ok(vec![measure("frames 9-16 of the glide: rel. error", "fraction", mean, if denoised { 0.18 } else { 0.45 })])
 }
 
 /// **Leaking** in `stability-leak`: a sealed room of zero-thickness walls with a point light

@@ -193,6 +193,10 @@ pub mod lights_facts {
     pub const MOVER_FROM: Vec3 = Vec3::new(-1.8, 2.0, -1.0);
     pub const MOVER_TO: Vec3 = Vec3::new(1.8, 2.0, -1.0);
     pub const MOVE_TIME: f32 = 0.5;
+    /// In `lights_sweep`, `mover` glides from MOVER_FROM to MOVER_TO over these seconds
+    /// (3.6 m in 60 frames of 1/30 s: 6 cm a frame).
+    pub const SWEEP_START: f32 = 0.5;
+    pub const SWEEP_END: f32 = 2.5;
     /// The point light the suite switches off (by setting its intensity to 0 between frames).
     pub const SWITCHED: &str = "switched";
 }
@@ -223,6 +227,19 @@ pub fn lights() -> Scene {
             values: vec![MOVER_FROM.extend(0.0), MOVER_TO.extend(0.0), MOVER_TO.extend(0.0)],
         }],
     });
+    s
+}
+
+/// `lights` with `mover` gliding instead: from MOVER_FROM at SWEEP_START to MOVER_TO at
+/// SWEEP_END (lights_facts), a light that changes every frame.
+pub fn lights_sweep() -> Scene {
+    use lights_facts::*;
+    let mut s = lights();
+    s.name = "builtin:stability-lights-sweep".into();
+    let channel = &mut s.animations[0].channels[0];
+    channel.interpolation = Interpolation::Linear;
+    channel.times = vec![0.0, SWEEP_START, SWEEP_END, HOLD];
+    channel.values = vec![MOVER_FROM.extend(0.0), MOVER_FROM.extend(0.0), MOVER_TO.extend(0.0), MOVER_TO.extend(0.0)];
     s
 }
 
