@@ -1,10 +1,9 @@
 // svgf_temporal (svgf_temporal.comp: one signal, svgf_temporal_<signal>;
 // svgf_temporal_diffuse_specular.comp: the frame's two, SVGF_PAIR): temporal accumulation of
-// demodulated signals. The
-// previous frame's filtered colour (the first a-trous iteration, copied by `history`), moments
-// and history length are reprojected through the motion vectors with bilinear taps that each
-// pass the validity test (on screen, same instance, depth, geometric normal); the new frame is blended in
-// with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
+// demodulated signals. The previous frame's filtered colour (the first a-trous iteration,
+// copied by `history`), moments and history length are reprojected through the motion
+// vectors with bilinear taps that each pass the validity test (on screen, same instance,
+// depth, geometric normal); the new frame is blended in with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
 // counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood (5x5
 // once the history is established, when the clamp gives back the light it takes out), so
 // neither poisons the history.
@@ -139,17 +138,17 @@ struct Neighbourhood {
     vec3 blurred;       // the edge-aware mean of the clamped samples (only without history)
 };
 
-// One pass over the 7x7 neighbourhood (surface pixels only), for each signal, for the outlier clamp's bound,
-// mean + k sigma of the luminance, which takes a firefly out of the history before anything
-// accumulates it; and, for a young history (`young`), the luminance variance around `l` (this pixel's
-// clamped luminance, which the luminance weight needs, so the clamp's bound is found first
-// and the window read twice only then) and, with `blur` (no history at all), the edge-aware
-// mean of the clamped samples on this pixel's instance.
+// One pass over the 7x7 neighbourhood (surface pixels only), for each signal, for the outlier
+// clamp's bound, mean + k sigma of the luminance, which takes a firefly out of the history
+// before anything accumulates it; and, for a young history (`young`), the luminance variance
+// around `l` (this pixel's clamped luminance, which the luminance weight needs, so the clamp's
+// bound is found first and the window read twice only then) and, with `blur` (no history at
+// all), the edge-aware mean of the clamped samples on this pixel's instance.
 //
-// With an established history the clamp keeps the firefly's energy: each pixel
-// takes an even share of what the clamp takes out of the brightest neighbour on its own
-// surface (normal within 25 degrees, depth within 5%). A firefly's own window never holds it,
-// so its neighbours' bounds leave the window's brightest sample out too: they then bound it as
+// With an established history the clamp keeps the firefly's energy: each pixel takes an even
+// share of what the clamp takes out of the brightest neighbour on its own surface (normal
+// within 25 degrees, depth within 5%). A firefly's own window never holds it, so its
+// neighbours' bounds leave the window's brightest sample out too: they then bound it as
 // it bounds itself, and what they take back adds up to about what its clamp removed. (Only
 // the brightest: two fireflies in one window are rare, and a per-neighbour account needs the
 // window's luminances kept, which made the pass half as slow again on lavapipe.) Its window
