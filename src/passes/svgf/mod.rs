@@ -5,11 +5,11 @@
 //! alpha) -> `svgf_atrous_diffuse_specular_0` ... `_<n-1>`, each stage filtering both at once,
 //!
 //! and a lone signal (the tests' injected one) the same with `svgf_temporal_<signal>` and
-//! `svgf_atrous_<signal>_<i>`. Each
-//! stage is a pass instance with its own named outputs, so `--dump-passes` shows the chain step
-//! by step. The first a-trous iteration's colour, and the temporal moments and history length,
-//! are kept for the next frame by the `history` pass. `svgf_guide` packs what the a-trous
-//! weights read of the G-buffer once per frame; the frame runs it before the chains.
+//! `svgf_atrous_<signal>_<i>`. Each stage is a pass instance with its own named outputs, so
+//! `--dump-passes` shows the chain step by step. The first a-trous iteration's colour, and the
+//! temporal moments and history length, are kept for the next frame by the `history` pass.
+//! `svgf_guide` packs what the a-trous weights read of the G-buffer once per frame; the frame
+//! runs it before the chains.
 
 pub mod atrous;
 pub mod guide;
