@@ -1,8 +1,8 @@
 //! Every light is shadowed, however many there are (issue 14): `builtin:many-lights` has 304
 //! punctual lights, 256 of them in a sealed room beside the camera's, behind a wall. The four
 //! brightest get per-light visibility from the shadows chain; the rest (those the plan does not
-//! cull) are resampled in gi (one light per pixel from candidates and last frame's reservoir,
-//! with shadow rays). On both ray backends:
+//! cull) are resampled in gi (one light per pixel from candidates drawn from the light grid and
+//! last frame's reservoir, with shadow rays). On both ray backends:
 //! - no leak: with only the hidden room's lights on, nothing in the camera's room can receive
 //!   light and the environment is black, so every pixel is exactly 0, in the raw first frame and
 //!   after denoising; with every light on, the floor strip by the wall (which no camera-room
@@ -10,8 +10,8 @@
 //!   leak would make it many times brighter (the test computes how much);
 //! - energy: the raw frames, averaged, with the radiance cache off, match a two-event reference
 //!   path tracer's mean luminance (the resampling is consistent); the denoised frame the user
-//!   sees (defaults) is compared with the full reference under a wide bound, because SVGF's
-//!   outlier clamp loses light there (a known gap, measured in the README).
+//!   sees (defaults) is compared with the full reference under a looser bound, because SVGF's
+//!   outlier clamp loses some light there (a known gap, measured in the README).
 
 mod common;
 
@@ -187,12 +187,12 @@ fn reference(ctx: &Arc<Context>, backend: Backend, max_bounces: u32, seed: u32) 
 
 const REFERENCE_SPP: u32 = 256;
 /// Allowed differences in mean luminance. The raw frames: the light sampling is consistent, and
-/// 32 frames of one GI sample each are noisier than 256 spp (measured -2.7%, both backends; the
-/// two references differ by 0.6%). The denoised frame: it loses light where GI's light samples
-/// are sparse, which SVGF's outlier clamp takes for fireflies (measured -24.4%; README, known
-/// gaps).
+/// 32 frames of one GI sample each are noisier than 256 spp (measured -3.1%, both backends; the
+/// two references differ by 0.2%). The denoised frame: it still loses some light where GI's
+/// light samples are sparse, which SVGF's outlier clamp takes for fireflies (measured -7.5% on
+/// both backends with the light grid; README, known gaps).
 const RAW_TOLERANCE: f64 = 0.05;
-const DENOISED_TOLERANCE: f64 = 0.40;
+const DENOISED_TOLERANCE: f64 = 0.10;
 /// Two scattering events, what the hybrid frame models with the radiance cache off.
 const TWO_EVENTS: u32 = 2;
 /// The reference's default: paths end by Russian roulette.

@@ -16,6 +16,7 @@
 #include "lights.glsl"
 #include "hit.glsl"
 #include "sampling.glsl"
+#include "light_grid.glsl"
 
 #define LIGHT_KIND_PUNCTUAL 0u
 #define LIGHT_KIND_EMITTER 1u
@@ -288,10 +289,52 @@ uint light_entry_search(float u) {
     return lo;
 }
 
+// Where a shading point draws the resampled punctual lights (those past the shadowed ones;
+// the table's entries SHADOWED_LIGHTS.. in light order) from: its cell of the light grid, or,
+// outside the grid, their sub-range [lo, hi) of the table's CDF. Only where such lights exist.
+struct ResampledLights {
+    bool in_grid;
+    uvec2 cell;
+    float lo;
+    float hi;
+};
+
+ResampledLights resampled_lights_at(vec3 p) {
+    ResampledLights r;
+    r.in_grid = light_grid_cell(p, r.cell);
+    r.lo = light_entries[SHADOWED_LIGHTS - 1u].cdf;
+    r.hi = light_entries[frame.light_count - 1u].cdf;
+    return r;
+}
+
+// A resampled light for u in [0, 1) and the probability of choosing it among the resampled
+// lights; NO_LIGHT when none can reach the point.
+uint resampled_light_pick(ResampledLights r, float u, out float pmf) {
+    if (r.in_grid) return light_grid_pick(r.cell, u, pmf);
+    pmf = 0.0;
+    if (!(r.hi > r.lo)) return NO_LIGHT;  // the resampled lights have no power
+    uint entry = light_entry_search(r.lo + u * (r.hi - r.lo));
+    // Rounding can put lo + u (hi - lo) on hi itself; such a draw selects nothing.
+    if (entry < SHADOWED_LIGHTS || entry >= frame.light_count) return NO_LIGHT;
+    pmf = light_entries[entry].pmf / (r.hi - r.lo);
+    return entry;
+}
+
 // One light sample for shading point p: u.x chooses the light, u.yz the point on it.
 NeeSample light_sample(vec3 p, vec3 u) {
     if (light_table.entry_count == 0u) return nee_none();
     LightEntry e = light_entries[light_entry_search(u.x)];
+    if (e.kind == LIGHT_KIND_PUNCTUAL && e.index >= SHADOWED_LIGHTS) {
+        // A resampled light: chosen again among them, from p's cell of the grid, with what is
+        // left of u.x (uniform in [lo, hi) on this branch). The probability of the resampled
+        // lights as a whole, hi - lo, stays as the table has it, so the other lights' densities
+        // (and MIS against them) do not change.
+        ResampledLights r = resampled_lights_at(p);
+        float pmf;
+        uint light = resampled_light_pick(r, clamp((u.x - r.lo) / (r.hi - r.lo), 0.0, 0.99999994), pmf);
+        if (light == NO_LIGHT) return nee_none();
+        return sample_punctual_light(light, p, u.yz, (r.hi - r.lo) * pmf);
+    }
     if (e.kind == LIGHT_KIND_PUNCTUAL) return sample_punctual_light(e.index, p, u.yz, e.pmf);
     if (e.kind == LIGHT_KIND_EMITTER) return sample_emitter(e.index, p, u.yz, e.pmf);
     return sample_environment(u.yz, e.pmf);

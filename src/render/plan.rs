@@ -9,9 +9,10 @@
 //!   animated scene a light or an object could move into range).
 //! - Up to four punctual lights each get their own ray-traced visibility (exact and noise-free,
 //!   with adaptive soft shadows); with more, the four brightest keep it and the rest are
-//!   resampled in gi: one light per pixel from candidates drawn by power and the pixel's
-//!   reservoir of last frame, with shadow rays, so the cost per pixel does not grow with their
-//!   number (see world::lights::shading_order and shaders-glsl/common/light_reservoir.glsl).
+//!   resampled in gi: one light per pixel from candidates drawn from the light grid (each cell
+//!   lists the lights whose range reaches it) and the pixel's reservoir of last frame, with
+//!   shadow rays, so the cost per pixel does not grow with their number (see
+//!   world::lights::shading_order, world::light_grid and shaders-glsl/common/light_reservoir.glsl).
 //! - Instances share one bottom-level structure per unique mesh (reported; always so).
 //! - GI runs every frame when any surface has a diffuse albedo or is rough enough for its
 //!   specular lobe to come from gi, or when lights are resampled (gi shades them); otherwise it
@@ -113,7 +114,8 @@ impl FramePlan {
             format!(
                 "many lights: {} punctual lights; the {} brightest ({}) keep a visibility of their own \
                  (exact, noise-free); the other {resampled_lights} are resampled in gi: per pixel one light \
-                 from {} candidates drawn by power and last frame's choice, weighted by its unshadowed \
+                 from {} candidates drawn from a light grid (a cell lists the lights that reach it, \
+                 weighed by what they can bring there) and last frame's choice, weighted by its unshadowed \
                  contribution, with shadow rays (ReSTIR-style temporal reuse); the cost per pixel does not \
                  grow with the number of lights",
                 light_order.len(),

@@ -1,6 +1,7 @@
 //! The light tables behind Monte Carlo light sampling (shaders-glsl/common/light_sampling.glsl):
 //! the emissive triangles, one CDF over every light by power, and the environment's texels and
-//! CDFs, bound in set 0 at bindings 12..16.
+//! CDFs, bound in set 0 at bindings 12..16; and the light grid over the resampled lights
+//! (`light_grid`), at bindings 19 and 20.
 //!
 //! Emissive triangles are stored in world space, rebuilt on the CPU when an emissive instance
 //! moves. The alternative, storing (instance, triangle) and transforming in the shader, would
@@ -16,7 +17,8 @@
 //! light that can contribute keeps the estimate unbiased.
 
 use super::environment::{EnvironmentData, luminance};
-use super::scene_gpu::binding;
+use super::light_grid::{self, GpuLightGridEntry, GpuLightGridHeader, LightGrid};
+use super::scene_gpu::{GpuLight, binding};
 use crate::gpu::{self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, vk};
 use crate::scene::{LightKind, Pose, Scene};
 use anyhow::Result;
@@ -24,6 +26,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
+
+/// Lights 0..SHADOWED_LIGHTS (in `shading_order`) have a visibility of their own from the
+/// shadows chain; the rest are resampled. Mirrors SHADOWED_LIGHTS in common/lights.glsl.
+pub const SHADOWED_LIGHTS: usize = 4;
 
 pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
 pub const LIGHT_KIND_EMITTER: u32 = 1;
@@ -67,10 +73,18 @@ pub struct GpuEmitter {
 
 /// The set-0 bindings this module fills.
 pub fn bindings() -> Vec<Binding> {
-    [binding::LIGHT_TABLE, binding::EMITTERS, binding::EMITTER_BASE, binding::ENV_TEXELS, binding::ENV_CDF]
-        .into_iter()
-        .map(|b| Binding { binding: b, kind: BindingKind::StorageBuffer, count: 1 })
-        .collect()
+    [
+        binding::LIGHT_TABLE,
+        binding::EMITTERS,
+        binding::EMITTER_BASE,
+        binding::ENV_TEXELS,
+        binding::ENV_CDF,
+        binding::LIGHT_GRID,
+        binding::LIGHT_GRID_ENTRIES,
+    ]
+    .into_iter()
+    .map(|b| Binding { binding: b, kind: BindingKind::StorageBuffer, count: 1 })
+    .collect()
 }
 
 pub struct LightTables {
@@ -80,6 +94,11 @@ pub struct LightTables {
     emitter_base: Buffer,
     env_texels: Buffer,
     env_cdf: Buffer,
+    /// The light grid's header and cells, and its entries (at most `grid_capacity`); rebuilt
+    /// when the punctual lights change.
+    grid: Buffer,
+    grid_entries: Buffer,
+    grid_capacity: usize,
     /// Instances whose material emits, and their transforms when the table was last built.
     emissive: Vec<u32>,
     built_for: Option<Vec<Mat4>>,
@@ -122,15 +141,46 @@ impl LightTables {
             gpu::upload::device_buffer(ctx, pool, "lights.env_texels", bytemuck::cast_slice(&env.texels), storage)?;
         let env_cdf = gpu::upload::device_buffer(ctx, pool, "lights.env_cdf", bytemuck::cast_slice(&env.cdf), storage)?;
         let radius = scene_radius(scene, pose);
+        let punctual_powers: Vec<f32> = scene.lights.iter().map(|l| punctual_power(l, radius)).collect();
+        let grid_cells = (light_grid::RESOLUTION as usize).pow(3);
+        let grid = Buffer::new(
+            ctx,
+            "lights.grid",
+            (size_of::<GpuLightGridHeader>() + grid_cells * size_of::<[u32; 2]>()) as u64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
+        // Room for the grid of the lights as they are now, twice over, so that lights that move
+        // rarely need a coarser grid, up to MAX_ENTRIES; and at least for every resampled light
+        // once (one cell).
+        let at_load = LightGrid::build_within(
+            &super::scene_gpu::gpu_lights(scene, pose),
+            &punctual_powers,
+            SHADOWED_LIGHTS,
+            scene.bounds(pose),
+            light_grid::RESOLUTION,
+            light_grid::MAX_ENTRIES,
+        );
+        let grid_capacity = (2 * at_load.entries.len()).min(light_grid::MAX_ENTRIES).max(scene.lights.len()).max(1);
+        let grid_entries = Buffer::new(
+            ctx,
+            "lights.grid_entries",
+            (grid_capacity * size_of::<GpuLightGridEntry>()) as u64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
         let mut tables = Self {
             table,
             emitters,
             emitter_base,
             env_texels,
             env_cdf,
+            grid,
+            grid_entries,
+            grid_capacity,
             emissive: emissive_instances(scene),
             built_for: None,
-            punctual_powers: scene.lights.iter().map(|l| punctual_power(l, radius)).collect(),
+            punctual_powers,
             env_power: 4.0 * PI * PI * radius * radius * luminance(env.mean),
             env_header: (env.width, env.height, env.constant.to_array()),
             sky: env.mean,
@@ -145,6 +195,31 @@ impl LightTables {
         set.write_buffer(binding::EMITTER_BASE, BindingKind::StorageBuffer, &self.emitter_base);
         set.write_buffer(binding::ENV_TEXELS, BindingKind::StorageBuffer, &self.env_texels);
         set.write_buffer(binding::ENV_CDF, BindingKind::StorageBuffer, &self.env_cdf);
+        set.write_buffer(binding::LIGHT_GRID, BindingKind::StorageBuffer, &self.grid);
+        set.write_buffer(binding::LIGHT_GRID_ENTRIES, BindingKind::StorageBuffer, &self.grid_entries);
+    }
+
+    /// Rebuilds the light grid for the punctual lights as written this frame, over the scene's
+    /// bounds at this pose; at a coarser resolution when the finest would not fit.
+    pub fn update_grid(&mut self, lights: &[GpuLight], bounds: (Vec3, Vec3)) -> Result<()> {
+        let grid = LightGrid::build_within(
+            lights,
+            &self.punctual_powers,
+            SHADOWED_LIGHTS,
+            bounds,
+            light_grid::RESOLUTION,
+            self.grid_capacity,
+        );
+        log::debug!(
+            "light grid: {:?} cells, {} entries for {} resampled lights",
+            grid.header.dims,
+            grid.entries.len(),
+            lights.len().saturating_sub(SHADOWED_LIGHTS)
+        );
+        self.grid.write(0, bytemuck::bytes_of(&grid.header))?;
+        self.grid.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(&grid.cells))?;
+        self.grid_entries.write(0, bytemuck::cast_slice(&grid.entries))?;
+        Ok(())
     }
 
     /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build;

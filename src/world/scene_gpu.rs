@@ -41,6 +41,10 @@ pub mod binding {
     pub const BRDF_DATA: u32 = 17;
     /// Last frame's positions of skinned vertices (src/world/skinning.rs).
     pub const PREV_POSITIONS: u32 = 18;
+    /// The light grid over the resampled lights (src/world/light_grid.rs): header and cells,
+    /// then the cells' entries.
+    pub const LIGHT_GRID: u32 = 19;
+    pub const LIGHT_GRID_ENTRIES: u32 = 20;
 }
 
 #[repr(C)]
@@ -354,11 +358,14 @@ impl SceneGpu {
             })
             .collect();
         self.instances.write(0, bytemuck::cast_slice(&instances))?;
-        let lights: Vec<GpuLight> = scene.lights.iter().map(|l| gpu_light(l, &pose.world[l.node as usize])).collect();
+        let lights = gpu_lights(scene, pose);
         self.lights.write(0, bytemuck::cast_slice(&lights))?;
         let punctual_changed = self.prev_lights.as_ref().is_none_or(|prev| {
             bytemuck::cast_slice::<GpuLight, u8>(prev) != bytemuck::cast_slice::<GpuLight, u8>(&lights)
         });
+        if punctual_changed {
+            self.light_tables.update_grid(&lights, scene.bounds(pose))?;
+        }
         self.prev_lights = Some(lights);
         let mut changed = Vec::new();
         if let Some(deformer) = &mut self.deformer {
@@ -467,6 +474,11 @@ fn gpu_material(m: &scene::Material) -> GpuMaterial {
         attenuation_color: m.attenuation_color.to_array(),
         uv_xform,
     }
+}
+
+/// The scene's punctual lights in world space at a pose.
+pub fn gpu_lights(scene: &Scene, pose: &Pose) -> Vec<GpuLight> {
+    scene.lights.iter().map(|l| gpu_light(l, &pose.world[l.node as usize])).collect()
 }
 
 fn gpu_light(l: &scene::Light, world: &Mat4) -> GpuLight {

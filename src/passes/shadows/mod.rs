@@ -26,8 +26,9 @@ use bytemuck::{Pod, Zeroable};
 pub const VISIBILITY: Output = filter::VISIBILITY;
 /// The visibility of a chain without soft lights (see [`Chain::visibility`]).
 pub const HARD_VISIBILITY: Output = trace::RING0;
-/// Lights beyond this many are shaded without shadows.
-pub const MAX_SHADOWED_LIGHTS: usize = 4;
+/// The first this many lights (the brightest: `world::lights::shading_order`) get the chain's
+/// visibility; the rest are resampled in gi.
+pub const MAX_SHADOWED_LIGHTS: usize = crate::world::lights::SHADOWED_LIGHTS;
 
 /// The named settings of the adaptive shadows.
 #[derive(Clone, Copy, Debug, serde::Serialize)]

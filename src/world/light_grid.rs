@@ -1,0 +1,301 @@
+//! A world-space grid over the resampled punctual lights (those past the shadowed ones; see
+//! `lights::shading_order`), read by shaders-glsl/common/light_grid.glsl at set-0 bindings 19
+//! and 20. Each cell lists the lights whose range reaches it, with a CDF over a bound of what
+//! each can deliver there; a shading point draws its candidates for those lights from its
+//! cell's list instead of from all of them by power.
+//!
+//! Why: with many short-range lights, a point sees few of them. Drawn by power from all, most
+//! candidates land on lights that are out of range, and a GI bounce's hit, which gets few
+//! draws, finds a light it can use only rarely: the rare lucky samples are bright, and SVGF's
+//! outlier clamp takes them for fireflies (the denoised `builtin:many-lights` was 11% dark).
+//!
+//! It stays unbiased: a light that is not listed in a cell is out of range of every point of
+//! it (its range window is exactly zero there), and a listed one has a positive probability.
+//! Points outside the grid (geometry that moved past the bounds it was built for) draw from
+//! all the resampled lights by power, as before. Lights without a range and directional lights
+//! are listed in every cell.
+
+use super::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL};
+use bytemuck::{Pod, Zeroable};
+use glam::{UVec3, Vec3};
+use std::f32::consts::PI;
+
+/// Cells along the longest side of the scene's bounds; the other sides get as many cells of
+/// the same size as they need. Mirrors nothing in GLSL (the header carries the sizes).
+pub const RESOLUTION: u32 = 16;
+
+/// The most entries a grid may hold (24 MB): past it, a coarser grid. A scene of a few thousand
+/// lights without a range would otherwise list every one of them in each of 4096 cells.
+pub const MAX_ENTRIES: usize = 1 << 21;
+
+/// Mirrors `LightGridHeader` in common/light_grid.glsl (scalar layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct GpuLightGridHeader {
+    pub lo: [f32; 3],
+    /// 0: no grid; every point draws from all the resampled lights.
+    pub cell_count: u32,
+    pub inv_cell: [f32; 3],
+    pub pad0: u32,
+    pub dims: [u32; 3],
+    pub pad1: u32,
+}
+
+/// Mirrors `LightGridEntry`: one light of a cell, with the cell's CDF.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuLightGridEntry {
+    pub light: u32,
+    /// Probability of choosing this entry or an earlier one of the cell (the cell's last is 1).
+    pub cdf: f32,
+    pub pmf: f32,
+}
+
+/// A built grid: the header, per cell (first entry, entry count), and the entries.
+#[derive(Clone, Debug, Default)]
+pub struct LightGrid {
+    pub header: GpuLightGridHeader,
+    pub cells: Vec<[u32; 2]>,
+    pub entries: Vec<GpuLightGridEntry>,
+}
+
+impl LightGrid {
+    /// The grid over lights `first..` of `lights` (`powers[i]`: light i's selection power, as
+    /// in the light table) within `bounds`, `resolution` cells along its longest side; None
+    /// when it would hold more than `capacity` entries (found out before they are all made).
+    /// Empty (no cells) when no light is resampled or the bounds are degenerate.
+    pub fn build(
+        lights: &[GpuLight],
+        powers: &[f32],
+        first: usize,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        capacity: usize,
+    ) -> Option<Self> {
+        let (lo, hi) = bounds;
+        let extent = hi - lo;
+        if lights.len() <= first || !extent.is_finite() || extent.max_element() <= 0.0 {
+            return Some(Self::default());
+        }
+        // Padded so that points on the bounds, and the shadow rays' offset origins just off
+        // them, fall inside.
+        let pad = Vec3::splat(1e-3 * extent.max_element() + 1e-4);
+        let (lo, hi) = (lo - pad, hi + pad);
+        let extent = hi - lo;
+        let cell = extent.max_element() / resolution.max(1) as f32;
+        let dims = (extent / cell).ceil().as_uvec3().clamp(UVec3::ONE, UVec3::splat(resolution.max(1)));
+        let size = extent / dims.as_vec3();
+        let cell_count = (dims.x * dims.y * dims.z) as usize;
+        let scene_radius = 0.5 * extent.length();
+        let half_diagonal_sq = (0.5 * size).length_squared();
+
+        // Per cell, the listed lights and their weights: each light visits only the cells its
+        // range reaches.
+        let mut lists: Vec<Vec<(u32, f32)>> = vec![Vec::new(); cell_count];
+        let mut listed = 0usize;
+        for (i, light) in lights.iter().enumerate().skip(first) {
+            let power = powers.get(i).copied().unwrap_or(0.0);
+            if !(power.is_finite() && power > 0.0) {
+                continue;
+            }
+            let reach = light_reach(light);
+            let (c0, c1) = if reach.is_finite() {
+                let p = Vec3::from(light.position);
+                let cell_of = |q: Vec3| ((q - lo) / size).floor().clamp(Vec3::ZERO, (dims - 1).as_vec3()).as_uvec3();
+                (cell_of(p - reach), cell_of(p + reach))
+            } else {
+                (UVec3::ZERO, dims - 1)
+            };
+            for z in c0.z..=c1.z {
+                for y in c0.y..=c1.y {
+                    for x in c0.x..=c1.x {
+                        let cell_lo = lo + UVec3::new(x, y, z).as_vec3() * size;
+                        if let Some(w) =
+                            cell_weight(light, power, (cell_lo, cell_lo + size), half_diagonal_sq, scene_radius)
+                        {
+                            lists[((z * dims.y + y) * dims.x + x) as usize].push((i as u32, w));
+                            listed += 1;
+                            if listed > capacity {
+                                return None;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+
+        let mut cells = Vec::with_capacity(cell_count);
+        let mut entries = Vec::new();
+        for list in &lists {
+            let total: f64 = list.iter().map(|&(_, w)| w as f64).sum();
+            cells.push([entries.len() as u32, list.len() as u32]);
+            let mut acc = 0.0f64;
+            for (k, &(light, w)) in list.iter().enumerate() {
+                acc += w as f64;
+                let cdf = if k + 1 == list.len() { 1.0 } else { (acc / total) as f32 };
+                entries.push(GpuLightGridEntry { light, cdf, pmf: (w as f64 / total) as f32 });
+            }
+        }
+        let header = GpuLightGridHeader {
+            lo: lo.to_array(),
+            cell_count: cell_count as u32,
+            inv_cell: (1.0 / size).to_array(),
+            pad0: 0,
+            dims: dims.to_array(),
+            pad1: 0,
+        };
+        Some(Self { header, cells, entries })
+    }
+
+    /// The grid at the finest resolution (from `resolution` down by halves) whose entries fit
+    /// in `capacity`: one cell lists each light at most once, so a single cell always fits
+    /// when `capacity` holds every resampled light.
+    pub fn build_within(
+        lights: &[GpuLight],
+        powers: &[f32],
+        first: usize,
+        bounds: (Vec3, Vec3),
+        resolution: u32,
+        capacity: usize,
+    ) -> Self {
+        let mut res = resolution.max(1);
+        loop {
+            let limit = if res == 1 { usize::MAX } else { capacity };
+            if let Some(grid) = Self::build(lights, powers, first, bounds, res, limit) {
+                return grid;
+            }
+            res /= 2;
+        }
+    }
+}
+
+/// How far from its position a light can deliver anything: its range (plus its radius, which
+/// moves a disk light's sample points off the centre); infinite without a range.
+fn light_reach(light: &GpuLight) -> f32 {
+    if light.kind == LIGHT_DIRECTIONAL || light.range <= 0.0 {
+        f32::INFINITY
+    } else {
+        light.range + light.radius.max(0.0)
+    }
+}
+
+/// The light's weight in a cell: a bound on the irradiance it can bring to the cell's nearest
+/// point (intensity / d^2 for lights at a position, with d no less than the cell's half
+/// diagonal; the irradiance E for a directional light), or None when its range does not reach
+/// the cell. Any positive weight keeps the estimate unbiased; this one steers candidates toward
+/// near and bright lights. A floor keeps a light whose window rounds to 0 at the edge drawable.
+fn cell_weight(
+    light: &GpuLight,
+    power: f32,
+    cell: (Vec3, Vec3),
+    half_diagonal_sq: f32,
+    scene_radius: f32,
+) -> Option<f32> {
+    if light.kind == LIGHT_DIRECTIONAL {
+        return Some(power / (PI * scene_radius * scene_radius));
+    }
+    let p = Vec3::from(light.position);
+    let d = (p.clamp(cell.0, cell.1) - p).length();
+    let reach = light_reach(light);
+    if d >= reach {
+        return None;
+    }
+    // power / 4 pi: the point light's intensity (a spot's averaged over the sphere).
+    let window = if reach.is_finite() { range_window(d - light.radius.max(0.0), light.range) } else { 1.0 };
+    Some(power / (4.0 * PI) * window.max(1e-4) / (d * d).max(half_diagonal_sq))
+}
+
+/// common/lights.glsl's `range_window`.
+fn range_window(dist: f32, range: f32) -> f32 {
+    if range <= 0.0 {
+        return 1.0;
+    }
+    let r = dist.max(0.0) / range;
+    let w = (1.0 - r * r * r * r).clamp(0.0, 1.0);
+    w * w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::scene_gpu::{LIGHT_DIRECTIONAL, LIGHT_POINT};
+
+    fn point(position: Vec3, range: f32) -> GpuLight {
+        GpuLight {
+            position: position.to_array(),
+            kind: LIGHT_POINT,
+            direction: [0.0, 0.0, -1.0],
+            range,
+            intensity: [1.0; 3],
+            radius: 0.0,
+            cos_inner: -1.0,
+            cos_outer: -1.0,
+            pad: [0; 2],
+        }
+    }
+
+    fn cell_of(grid: &LightGrid, p: Vec3) -> usize {
+        let h = &grid.header;
+        let c = ((p - Vec3::from(h.lo)) * Vec3::from(h.inv_cell)).as_uvec3();
+        ((c.z * h.dims[1] + c.y) * h.dims[0] + c.x) as usize
+    }
+
+    fn listed(grid: &LightGrid, cell: usize) -> Vec<u32> {
+        let [first, count] = grid.cells[cell];
+        grid.entries[first as usize..(first + count) as usize].iter().map(|e| e.light).collect()
+    }
+
+    #[test]
+    fn a_cell_lists_exactly_the_lights_that_reach_it() {
+        let bounds = (Vec3::ZERO, Vec3::splat(16.0));
+        // Lights 0 and 1 are shadowed (not in the grid); 2 reaches 1 unit, 3 has no range, 4
+        // is directional, 5 has no power.
+        let lights = vec![
+            point(Vec3::splat(8.0), 0.0),
+            point(Vec3::splat(8.0), 0.0),
+            point(Vec3::new(2.5, 2.5, 2.5), 1.0),
+            point(Vec3::new(12.0, 12.0, 12.0), 0.0),
+            GpuLight { kind: LIGHT_DIRECTIONAL, ..point(Vec3::ZERO, 0.0) },
+            point(Vec3::new(2.5, 2.5, 2.5), 5.0),
+        ];
+        let powers = [1.0, 1.0, 1.0, 1.0, 1.0, 0.0];
+        let grid = LightGrid::build(&lights, &powers, 2, bounds, RESOLUTION, usize::MAX).unwrap();
+        assert_eq!(grid.header.dims, [16, 16, 16]);
+        assert_eq!(listed(&grid, cell_of(&grid, Vec3::new(2.5, 2.5, 2.5))), vec![2, 3, 4]);
+        assert_eq!(listed(&grid, cell_of(&grid, Vec3::new(10.5, 2.5, 2.5))), vec![3, 4]);
+        // Every point within range of light 2 is in a cell that lists it.
+        for k in 0..1000 {
+            let t = k as f32 * 0.618;
+            let dir = Vec3::new(t.sin() * (3.0 * t).cos(), t.cos(), t.sin() * (3.0 * t).sin());
+            let q = Vec3::splat(2.5) + dir * 0.999 * (k % 10) as f32 / 10.0;
+            assert!(listed(&grid, cell_of(&grid, q)).contains(&2), "{q}");
+        }
+        for (cell, &[first, count]) in grid.cells.iter().enumerate() {
+            let e = &grid.entries[first as usize..(first + count) as usize];
+            assert!(e.windows(2).all(|w| w[0].cdf <= w[1].cdf), "cell {cell}");
+            assert_eq!(e.last().map(|e| e.cdf), Some(1.0), "cell {cell}");
+            let sum: f32 = e.iter().map(|e| e.pmf).sum();
+            assert!((sum - 1.0).abs() < 1e-5 && e.iter().all(|e| e.pmf > 0.0), "cell {cell}");
+        }
+    }
+
+    #[test]
+    fn nearer_lights_weigh_more_and_the_grid_fits_its_capacity() {
+        let bounds = (Vec3::ZERO, Vec3::new(16.0, 4.0, 2.0));
+        let lights: Vec<GpuLight> = (0..40).map(|i| point(Vec3::new(0.4 * i as f32, 1.0, 1.0), 0.0)).collect();
+        let powers = vec![1.0; lights.len()];
+        let grid = LightGrid::build(&lights, &powers, 4, bounds, RESOLUTION, usize::MAX).unwrap();
+        assert_eq!(grid.header.dims[0], 16);
+        let cell = cell_of(&grid, Vec3::new(0.5, 1.0, 1.0));
+        let [first, count] = grid.cells[cell];
+        let e = &grid.entries[first as usize..(first + count) as usize];
+        assert_eq!(count, 36);
+        assert!(e[0].pmf > 10.0 * e[35].pmf, "{} vs {}", e[0].pmf, e[35].pmf);
+        let fit = LightGrid::build_within(&lights, &powers, 4, bounds, RESOLUTION, 36 * 20);
+        assert!(fit.entries.len() <= 36 * 20 && fit.header.dims[0] < 16, "{:?}", fit.header.dims);
+        let one = LightGrid::build_within(&lights, &powers, 4, bounds, RESOLUTION, 36);
+        assert_eq!((one.header.cell_count, one.entries.len()), (1, 36));
+        assert!(LightGrid::build(&lights, &powers, 4, bounds, RESOLUTION, 36 * 20).is_none());
+        assert_eq!(LightGrid::build_within(&lights, &powers, 40, bounds, RESOLUTION, 1).header.cell_count, 0);
+    }
+}
