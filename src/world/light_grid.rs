@@ -1,21 +1,22 @@
 //! A world-space grid over the resampled punctual lights (those past the shadowed ones; see
 //! `lights::shading_order`), read by shaders-glsl/common/light_grid.glsl at set-0 bindings 19
-//! and 20. Each cell lists the lights whose range reaches it, with a CDF over a bound of what
-//! each can deliver there; a shading point draws its candidates for those lights from its
-//! cell's list instead of from all of them by power.
+//! and 20. Each cell lists the lights whose range (and, for a spot, outer cone) reaches it,
+//! with a CDF over a bound of what each can deliver there; a shading point draws its
+//! candidates for those lights from its cell's list instead of from all of them by power.
 //!
 //! Why: with many short-range lights, a point sees few of them. Drawn by power from all, most
 //! candidates land on lights that are out of range, and a GI bounce's hit, which gets few
 //! draws, finds a light it can use only rarely: the rare lucky samples are bright, and SVGF's
 //! outlier clamp takes them for fireflies (the denoised `builtin:many-lights` was 11% dark).
 //!
-//! It stays unbiased: a light that is not listed in a cell is out of range of every point of
-//! it (its range window is exactly zero there), and a listed one has a positive probability.
-//! Points outside the grid (geometry that moved past the bounds it was built for) draw from
-//! all the resampled lights by power, as before. Lights without a range and directional lights
-//! are listed in every cell.
+//! It stays unbiased: a light that is not listed in a cell is out of range or outside the cone
+//! of every point of it (its range window or cone factor is exactly zero there), and a listed
+//! one has a positive probability. Points outside the grid (geometry that moved past the
+//! bounds it was built for) draw from all the resampled lights by power, as before. Lights
+//! without a range and directional lights are listed in every cell (spots: where their cone
+//! reaches).
 
-use super::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL};
+use super::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec3, Vec3};
 use std::f32::consts::PI;
@@ -197,12 +198,31 @@ fn cell_weight(
     let p = Vec3::from(light.position);
     let d = (p.clamp(cell.0, cell.1) - p).length();
     let reach = light_reach(light);
-    if d >= reach {
+    if d >= reach || (light.kind == LIGHT_SPOT && !cone_reaches(light, cell)) {
         return None;
     }
     // power / 4 pi: the point light's intensity (a spot's averaged over the sphere).
     let window = if reach.is_finite() { range_window(d - light.radius.max(0.0), light.range) } else { 1.0 };
     Some(power / (4.0 * PI) * window.max(1e-4) / (d * d).max(half_diagonal_sq))
+}
+
+/// Whether a spot's outer cone can reach a cell. A spot delivers nothing at an angle of its
+/// outer cone or more from its axis (common/lights.glsl), so a cell is out of reach when its
+/// centre lies further from the axis than the outer cone plus the angle the cell's bounding
+/// sphere subtends from the light. That sphere is grown by the light's radius, because a disk
+/// light's sample points leave its centre.
+fn cone_reaches(light: &GpuLight, cell: (Vec3, Vec3)) -> bool {
+    let to_cell = 0.5 * (cell.0 + cell.1) - Vec3::from(light.position);
+    let spread = 0.5 * (cell.1 - cell.0).length() + light.radius.max(0.0);
+    let d = to_cell.length();
+    let axis = Vec3::from(light.direction).normalize_or_zero();
+    if d <= spread || axis == Vec3::ZERO {
+        return true;
+    }
+    let from_axis = (axis.dot(to_cell) / d).clamp(-1.0, 1.0).acos();
+    let outer = light.cos_outer.clamp(-1.0, 1.0).acos();
+    // The margin absorbs rounding in the shader's own cone test.
+    from_axis - (spread / d).asin() < outer + 1e-3
 }
 
 /// common/lights.glsl's `range_window`.
@@ -276,6 +296,42 @@ mod tests {
             assert_eq!(e.last().map(|e| e.cdf), Some(1.0), "cell {cell}");
             let sum: f32 = e.iter().map(|e| e.pmf).sum();
             assert!((sum - 1.0).abs() < 1e-5 && e.iter().all(|e| e.pmf > 0.0), "cell {cell}");
+        }
+    }
+
+    #[test]
+    fn a_spot_is_listed_only_where_its_cone_reaches() {
+        let bounds = (Vec3::ZERO, Vec3::splat(16.0));
+        let at = Vec3::new(8.0, 15.0, 8.0);
+        let outer = 30f32.to_radians();
+        let mut lights = vec![point(Vec3::ZERO, 0.0); 4];
+        lights.push(GpuLight {
+            kind: LIGHT_SPOT,
+            direction: [0.0, -1.0, 0.0],
+            cos_inner: 20f32.to_radians().cos(),
+            cos_outer: outer.cos(),
+            ..point(at, 0.0)
+        });
+        let powers = vec![1.0; lights.len()];
+        let grid = LightGrid::build(&lights, &powers, 4, bounds, RESOLUTION, usize::MAX).unwrap();
+        let lists = |q: Vec3| listed(&grid, cell_of(&grid, q)).contains(&4);
+        assert!(lists(Vec3::new(8.0, 1.0, 8.0)));
+        // Beside and above the light, and on the floor well outside the cone's footprint
+        // (radius 14 tan 30 = 8.1 around (8, 8)).
+        assert!(!lists(Vec3::new(1.0, 15.5, 1.0)));
+        assert!(!lists(Vec3::new(8.0, 15.9, 12.0)));
+        assert!(!lists(Vec3::new(0.5, 0.5, 0.5)));
+        let culled = grid.cells.iter().filter(|c| c[1] == 0).count();
+        assert!(culled > grid.cells.len() / 2, "{culled} of {} cells culled", grid.cells.len());
+        // Every point strictly inside the cone is in a cell that lists the spot.
+        for k in 0..2000 {
+            let t = k as f32 * 0.618;
+            let angle = (k % 97) as f32 / 97.0 * 0.999 * outer;
+            let dir = Vec3::new(angle.sin() * t.cos(), -angle.cos(), angle.sin() * t.sin());
+            let q = at + dir * (0.05 + 14.0 * (k % 13) as f32 / 13.0);
+            if q.cmpge(Vec3::ZERO).all() && q.cmplt(Vec3::splat(16.0)).all() {
+                assert!(lists(q), "{q} at {} degrees from the axis", angle.to_degrees());
+            }
         }
     }
 
