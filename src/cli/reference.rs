@@ -42,6 +42,10 @@ pub struct ReferenceArgs {
     /// Material model: `gltf` (glTF 2.0 Appendix B) or `coupled` (energy-coupled diffuse).
     #[arg(long, value_enum, default_value_t)]
     brdf: crate::world::brdf::BrdfModel,
+    /// Draw the resampled lights (past the four brightest) by power from all of them instead
+    /// of from the light grid's cell: unbiased either way, noisier without; to check the grid.
+    #[arg(long)]
+    no_light_grid: bool,
     /// Scattering events per path at most; 1 renders direct light only. Russian roulette ends
     /// paths well before the default, which only guards against endless paths.
     #[arg(long, default_value_t = 256)]
@@ -82,6 +86,7 @@ pub fn run(a: &ReferenceArgs) -> Result<()> {
         environment,
         mode: RenderMode::Reference { seed: a.seed, max_bounces: a.max_bounces },
         brdf: a.brdf,
+        light_grid: !a.no_light_grid,
         ..Default::default()
     };
     let camera = a.camera.clone().unwrap_or_default();

@@ -77,6 +77,10 @@ pub struct RenderArgs {
     /// Material model: `gltf` (glTF 2.0 Appendix B) or `coupled` (energy-coupled diffuse).
     #[arg(long, value_enum, default_value_t)]
     brdf: crate::world::brdf::BrdfModel,
+    /// Draw the resampled lights (past the four brightest) by power from all of them instead
+    /// of from the light grid's cell: unbiased either way, noisier without; to check the grid.
+    #[arg(long)]
+    no_light_grid: bool,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -128,6 +132,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         full: a.full,
         environment: a.environment.environment(),
         brdf: a.brdf,
+        light_grid: !a.no_light_grid,
         ..Default::default()
     };
     if let Some(b) = a.gi_bounces {

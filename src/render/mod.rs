@@ -61,6 +61,9 @@ pub struct Settings {
     pub mode: RenderMode,
     /// How the material's diffuse and specular lobes share light (`--brdf`).
     pub brdf: brdf::BrdfModel,
+    /// Draw the resampled lights from the light grid (world::light_grid). Off
+    /// (`--no-light-grid`): by power from all of them, what the grid is checked against.
+    pub light_grid: bool,
 }
 
 /// Which frame the renderer builds.
@@ -101,6 +104,7 @@ impl Default for Settings {
             test_signal: false,
             mode: RenderMode::Hybrid,
             brdf: brdf::BrdfModel::Gltf,
+            light_grid: true,
         }
     }
 }
@@ -220,7 +224,17 @@ impl Renderer {
         let pose = scene.evaluate(settings.start_time);
         let (lo, hi) = scene.bounds(&pose);
         let scene_centre = if lo.is_finite() && hi.is_finite() { (lo + hi) * 0.5 } else { glam::Vec3::ZERO };
-        let scene_gpu = SceneGpu::upload(ctx, &pool, shaders, &scene, &pose, backend, &environment, settings.brdf)?;
+        let scene_gpu = SceneGpu::upload(
+            ctx,
+            &pool,
+            shaders,
+            &scene,
+            &pose,
+            backend,
+            &environment,
+            settings.brdf,
+            settings.light_grid,
+        )?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
         let parts = frame_parts(&b, &settings, &plan)?;
         let extent = vk::Extent2D { width: settings.width, height: settings.height };

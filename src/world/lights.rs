@@ -99,6 +99,9 @@ pub struct LightTables {
     grid: Buffer,
     grid_entries: Buffer,
     grid_capacity: usize,
+    /// Off (`Settings::light_grid`): the grid stays empty and every point draws the resampled
+    /// lights by power from all of them.
+    grid_enabled: bool,
     /// Instances whose material emits, and their transforms when the table was last built.
     emissive: Vec<u32>,
     built_for: Option<Vec<Mat4>>,
@@ -117,6 +120,7 @@ impl LightTables {
         scene: &Scene,
         pose: &Pose,
         env: &EnvironmentData,
+        grid_enabled: bool,
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let (bases, emitter_count) = emitter_bases(scene);
@@ -178,6 +182,7 @@ impl LightTables {
             grid,
             grid_entries,
             grid_capacity,
+            grid_enabled,
             emissive: emissive_instances(scene),
             built_for: None,
             punctual_powers,
@@ -202,6 +207,9 @@ impl LightTables {
     /// Rebuilds the light grid for the punctual lights as written this frame, over the scene's
     /// bounds at this pose; at a coarser resolution when the finest would not fit.
     pub fn update_grid(&mut self, lights: &[GpuLight], bounds: (Vec3, Vec3)) -> Result<()> {
+        if !self.grid_enabled {
+            return self.grid.write(0, bytemuck::bytes_of(&GpuLightGridHeader::default()));
+        }
         let grid = LightGrid::build_within(
             lights,
             &self.punctual_powers,

@@ -198,6 +198,7 @@ impl SceneGpu {
         backend: Backend,
         environment: &EnvironmentData,
         brdf: super::brdf::BrdfModel,
+        light_grid: bool,
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Acceleration-structure builds read the geometry by device address.
@@ -290,7 +291,7 @@ impl SceneGpu {
         let mut bindings = scene_bindings(texture_bindings.len() as u32);
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
-        let light_tables = LightTables::new(ctx, pool, scene, pose, environment)?;
+        let light_tables = LightTables::new(ctx, pool, scene, pose, environment, light_grid)?;
         let brdf_data = gpu::upload::device_buffer(ctx, pool, "brdf_data", &super::brdf::gpu_data(brdf), storage)?;
         let set_layout = DescriptorSetLayout::new(ctx, &bindings, false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;
