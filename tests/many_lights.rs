@@ -211,7 +211,7 @@ fn camera_room() -> Scene {
 fn spots() -> Scene {
     let mut s = camera_room();
     let Scene { lights, nodes, .. } = &mut s;
-    for l in lights.iter_mut().filter(|l| !hidden(&l.name)) {
+    for l in lights.iter_mut() {
         l.kind = LightKind::Spot { inner_cone: 0.3, outer_cone: 0.5 };
         l.range = None;
         nodes[l.node as usize].rotation = Quat::from_rotation_x(-FRAC_PI_2);

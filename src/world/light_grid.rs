@@ -31,7 +31,7 @@ pub const MAX_ENTRIES: usize = 1 << 21;
 
 /// Mirrors `LightGridHeader` in common/light_grid.glsl (scalar layout).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuLightGridHeader {
     pub lo: [f32; 3],
     /// 0: no grid; every point draws from all the resampled lights.
@@ -44,7 +44,7 @@ pub struct GpuLightGridHeader {
 
 /// Mirrors `LightGridEntry`: one light of a cell, with the cell's CDF.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuLightGridEntry {
     pub light: u32,
     /// Probability of choosing this entry or an earlier one of the cell (the cell's last is 1).
@@ -65,7 +65,7 @@ impl LightGrid {
     /// in the light table) within `bounds`, `resolution` cells along its longest side; None
     /// when it would hold more than `capacity` entries (found out before they are all made).
     /// Empty (no cells) when no light is resampled or the bounds are degenerate.
-    pub fn build(
+    fn build(
         lights: &[GpuLight],
         powers: &[f32],
         first: usize,
