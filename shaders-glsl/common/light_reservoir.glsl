@@ -114,8 +114,8 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
 #define RIS_VERTEX_CANDIDATES 8u
 
 // One light sample at a path vertex, any kind of light, chosen among RIS_VERTEX_CANDIDATES draws
-// of light_sample (by power, the resampled lights from the light grid) by the luminance of their unshadowed contribution f cos Le; `f` is
-// the chosen one's f cos. Resampled in primary sample space: every draw's u is uniform, so a
+// of light_sample (by power, the resampled lights from the light grid) by the luminance of
+// their unshadowed contribution f cos Le; `f` is the chosen one's f cos. Resampled in primary sample space: every draw's u is uniform, so a
 // draw's resampling weight is its target itself, and delta, area and environment lights mix
 // without a common measure. `weight` includes the RIS factor, so pdf is no density to weigh
 // against a BSDF sample's: it only tells whether a BSDF-sampled ray can reach the light (> 0) or
