@@ -35,6 +35,8 @@
 // denoiser's temporal stage then sees every pixel's own samples every other frame.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
+// The shadow rays toward resampled lights teach the light grid what its cells see.
+#define LIGHT_GRID_LEARN
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
@@ -154,12 +156,14 @@ void shade(ivec2 px) {
         }
         float cos_l = max(dot(n, ls.dir), 0.0);
         // What passes the see-through surfaces on the way scales the sample.
-        if (dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0) {
+        bool traced = dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0;
+        if (traced) {
             ls.weight *= trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
         } else {
             ls.weight = vec3(0.0);
         }
         bool visible = dot(ls.weight, ls.weight) > 0.0;
+        if (k > 0u && traced) light_grid_learn(origin, r.light, visible);
         if (k == 0u) {
             if (!visible) continue;
             float w = mis_power(ls.pdf, cos_l * INV_PI);

@@ -3,8 +3,23 @@
 // there. Lights a cell does not list deliver nothing to any point in it, so drawing from the
 // list is unbiased; common/light_sampling.glsl draws from all resampled lights by power where
 // a point is outside the grid.
+//
+// The hybrid frame also learns what each cell sees. The lights are sorted into groups by where
+// they are (a coarse grid over the same bounds), and gi (compiled with LIGHT_GRID_LEARN) counts,
+// per cell and group, its shadow rays toward the group's lights and those that reach them
+// (light_grid_learn). light_grid_update.comp then scales each entry's bound by a factor of its
+// group's visibility from the cell (light_grid_visibility_factor) and rebuilds the cell's CDF
+// before the next frame's passes draw from it; and the resampling targets
+// (common/light_reservoir.glsl) take the same factor (NeeSample.seen, light_grid_seen):
+// resampling tends toward its target whatever the candidates were drawn by, so a bright light
+// behind a wall would otherwise still win most draws that find it. A group pools the rays of
+// all its lights: one light among hundreds is drawn too rarely to be learned on its own. Every
+// listed light keeps a share (LIGHT_GRID_VISIBILITY_FLOOR), so the choice and the resampling
+// stay unbiased.
 #ifndef LIGHT_GRID_GLSL
 #define LIGHT_GRID_GLSL
+
+#include "lights.glsl"
 
 #define NO_LIGHT 0xffffffffu
 
@@ -12,39 +27,74 @@ struct LightGridHeader {
     vec3 lo;
     uint cell_count;  // 0: no grid
     vec3 inv_cell;
-    uint pad0;
+    uint group_count;  // light groups: the visibility buffer holds cell_count x group_count
     uvec3 dims;
     uint pad1;
 };
 
 struct LightGridEntry {
-    uint light;  // index into lights[]
-    float cdf;   // of the cell's list; its last entry has exactly 1
+    uint light;   // index into lights[]
+    float cdf;    // of the cell's list; its last entry has exactly 1
     float pmf;
+    float bound;  // what the light can deliver to the cell, before visibility (unnormalised)
+    uint group;   // the light's group
 };
+
+// Per cell and light group, what the shadow rays from the cell toward the group's lights
+// found: the running estimate of the share that reach them (1 until measured), and this
+// frame's count of rays and of those that reached a light (atomics; light_grid_update.comp
+// folds them into the estimate and zeroes them).
+struct LightGridVisibility {
+    float visible;
+    uint rays;
+    uint reached;
+};
+
+// Each listed light keeps at least this share of its bound, however rarely its group is seen
+// from the cell, so a light visible from a corner of a cell is still drawn there.
+#define LIGHT_GRID_VISIBILITY_FLOOR 0.01
+
+// What a light's learned visibility scales its weight by, in the CDF and the resampling targets.
+float light_grid_visibility_factor(float visible) {
+    return LIGHT_GRID_VISIBILITY_FLOOR + (1.0 - LIGHT_GRID_VISIBILITY_FLOOR) * visible;
+}
 
 // Per cell, (first entry, entry count).
 layout(set = 0, binding = 19, scalar) readonly buffer LightGrid {
     LightGridHeader light_grid;
     uvec2 light_grid_cells[];
 };
+// Written by light_grid_update.comp only (LIGHT_GRID_WRITE).
+#ifdef LIGHT_GRID_WRITE
+layout(set = 0, binding = 20, scalar) buffer LightGridEntries { LightGridEntry light_grid_entries[]; };
+#else
 layout(set = 0, binding = 20, scalar) readonly buffer LightGridEntries { LightGridEntry light_grid_entries[]; };
+#endif
+#if defined(LIGHT_GRID_WRITE) || defined(LIGHT_GRID_LEARN)
+layout(set = 0, binding = 21, scalar) buffer LightGridVisibilities { LightGridVisibility light_grid_visibility[]; };
+#else
+layout(set = 0, binding = 21, scalar) readonly buffer LightGridVisibilities { LightGridVisibility light_grid_visibility[]; };
+#endif
 
-// The cell of point p; false where there is no grid or p lies outside it (NaN included).
-bool light_grid_cell(vec3 p, out uvec2 cell) {
-    cell = uvec2(0u);
+// The index of point p's cell; false where there is no grid or p lies outside it (NaN
+// included).
+bool light_grid_cell_index(vec3 p, out uint index) {
+    index = 0u;
     if (light_grid.cell_count == 0u) return false;
     vec3 c = (p - light_grid.lo) * light_grid.inv_cell;
     if (!(all(greaterThanEqual(c, vec3(0.0))) && all(lessThan(c, vec3(light_grid.dims))))) return false;
     uvec3 i = min(uvec3(c), light_grid.dims - 1u);
-    cell = light_grid_cells[(i.z * light_grid.dims.y + i.y) * light_grid.dims.x + i.x];
+    index = (i.z * light_grid.dims.y + i.y) * light_grid.dims.x + i.x;
     return true;
 }
 
-// A light of the cell by its CDF, u in [0, 1), and the probability of that choice; NO_LIGHT
-// when the cell lists none (no resampled light reaches it).
-uint light_grid_pick(uvec2 cell, float u, out float pmf) {
+// A light of cell `index` (its entries `cell`) by the CDF, u in [0, 1), and the probability of
+// that choice; NO_LIGHT when the cell lists none (no resampled light reaches it). `seen`: the
+// factor its learned visibility puts on resampling targets (light_grid_seen's, read from the
+// chosen entry without a search).
+uint light_grid_pick(uint index, uvec2 cell, float u, out float pmf, out float seen) {
     pmf = 0.0;
+    seen = 1.0;
     if (cell.y == 0u) return NO_LIGHT;
     uint lo = cell.x;
     uint hi = cell.x + cell.y - 1u;
@@ -53,7 +103,50 @@ uint light_grid_pick(uvec2 cell, float u, out float pmf) {
         if (light_grid_entries[mid].cdf > u) hi = mid; else lo = mid + 1u;
     }
     pmf = light_grid_entries[lo].pmf;
+    uint key = index * light_grid.group_count + light_grid_entries[lo].group;
+    seen = light_grid_visibility_factor(light_grid_visibility[key].visible);
     return light_grid_entries[lo].light;
 }
+
+// The index into light_grid_visibility of punctual light `light` seen from point p: p's cell
+// and the light's group. False when p is outside the grid or its cell does not list the light
+// (a shadowed light among them). A cell lists its lights in index order
+// (src/world/light_grid.rs), so the light's entry, which names its group, is found by bisection.
+bool light_grid_visibility_key(vec3 p, uint light, out uint key) {
+    key = 0u;
+    uint index;
+    if (light < SHADOWED_LIGHTS || light == NO_LIGHT || !light_grid_cell_index(p, index)) return false;
+    uvec2 cell = light_grid_cells[index];
+    if (cell.y == 0u) return false;
+    uint lo = cell.x;
+    uint hi = cell.x + cell.y - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (light_grid_entries[mid].light < light) lo = mid + 1u; else hi = mid;
+    }
+    if (light_grid_entries[lo].light != light) return false;
+    key = index * light_grid.group_count + light_grid_entries[lo].group;
+    return true;
+}
+
+// The factor light `light`'s learned visibility from p's cell puts on its resampling target; 1
+// where nothing is learned (a light the cell does not list, a point outside the grid, the
+// reference, which runs no update and so keeps every estimate at 1).
+float light_grid_seen(vec3 p, uint light) {
+    uint key;
+    if (!light_grid_visibility_key(p, light, key)) return 1.0;
+    return light_grid_visibility_factor(light_grid_visibility[key].visible);
+}
+
+#ifdef LIGHT_GRID_LEARN
+// Counts a shadow ray from point p toward punctual light `light`, and whether it reached it,
+// for p's cell and the light's group.
+void light_grid_learn(vec3 p, uint light, bool reached) {
+    uint key;
+    if (!light_grid_visibility_key(p, light, key)) return;
+    atomicAdd(light_grid_visibility[key].rays, 1u);
+    if (reached) atomicAdd(light_grid_visibility[key].reached, 1u);
+}
+#endif
 
 #endif

@@ -9,8 +9,9 @@
 //   (common/light_grid.glsl: the resampled lights that reach it, weighed by what they can
 //   deliver there), or by power from all the resampled lights outside the grid.
 // - Target p_hat: the luminance of the unshadowed contribution f(v, l) cos Le, so that distance,
-//   range, spot cone, cosine and both lobes steer the choice.
-// - Visibility is not in p_hat (a ray per candidate would cost what it saves), but it is in
+//   range, spot cone, cosine and both lobes steer the choice, times what the light grid has
+//   learned of how often the light's group is seen from the pixel's cell (light_grid_seen).
+// - This pixel's own visibility is not in p_hat (a ray per candidate would cost what it saves), but it is in
 //   what a reservoir carries forward: the frame's chosen candidate is shadow-tested before it is
 //   merged, an occluded one enters with weight 0 (its candidates still count in M), and last
 //   frame's choice is tested again when it wins (occluded: weight 0, count kept). So once a pixel has found a light it can see,
@@ -68,9 +69,10 @@ NeeSample reservoir_light_sample(ShadingPoint sp, uint light, vec2 u) {
     return s;
 }
 
-// p_hat: luminance of f(v, l) cos Le for the sample.
+// p_hat: luminance of f(v, l) cos Le for the sample, times what the light grid learned of the
+// light's visibility from here (s.seen).
 float reservoir_target(ShadingPoint sp, NeeSample s) {
-    float t = luminance(brdf_eval_cos(sp.m, sp.n, sp.v, s.dir) * s.weight);
+    float t = luminance(brdf_eval_cos(sp.m, sp.n, sp.v, s.dir) * s.weight) * s.seen;
     return t > 0.0 && !isinf(t) ? t : 0.0;
 }
 
@@ -94,11 +96,12 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
     // Not unrolled: each copy of the body would lengthen a CPU driver's compile.
     [[dont_unroll]] for (uint k = 0u; k < RIS_CANDIDATES; ++k) {
         vec3 u = rng_next3(rng);
-        float pmf;
-        uint light = resampled_light_pick(lights_here, u.x, pmf);
+        float pmf, seen;
+        uint light = resampled_light_pick(lights_here, u.x, pmf, seen);
         float w = 0.0, p_hat = 0.0;
         if (light != NO_LIGHT) {
             NeeSample s = reservoir_light_sample(sp, light, u.yz);
+            s.seen = seen;
             p_hat = reservoir_target(sp, s);
             w = p_hat / pmf;
         }
@@ -134,7 +137,7 @@ NeeSample light_sample_resampled(vec3 origin, BrdfInput m, vec3 n, vec3 ng, vec3
         NeeSample s = light_sample(origin, rng_next3(rng));
         if (dot(s.weight, s.weight) <= 0.0 || dot(s.dir, ng) <= 0.0) continue;
         vec3 fk = brdf_eval_cos(m, n, v, s.dir);
-        float p_hat = luminance(fk * s.weight);
+        float p_hat = luminance(fk * s.weight) * s.seen;
         if (!(p_hat > 0.0) || isinf(p_hat)) continue;
         w_sum += p_hat;
         // A lone draw is always kept; drawing no number for it keeps light_sample's random
@@ -171,7 +174,9 @@ LightReservoir reservoir_unpack(vec4 texel, ShadingPoint sp) {
     if (light < SHADOWED_LIGHTS || light >= frame.light_count || !(texel.y > 0.0)) return r;
     r.light = light;
     r.u = unpackUnorm2x16(floatBitsToUint(texel.w));
-    r.p_hat = reservoir_target(sp, reservoir_light_sample(sp, light, r.u));
+    NeeSample s = reservoir_light_sample(sp, light, r.u);
+    s.seen = light_grid_seen(sp.origin, light);
+    r.p_hat = reservoir_target(sp, s);
     r.w_sum = r.p_hat * texel.y * r.m;
     return r;
 }

@@ -185,6 +185,9 @@ struct NeeSample {
     vec3 weight;    // radiance / (selection probability * pdf): the sample's estimate per unit f*cos
     float pdf;      // solid-angle density including selection, for MIS; 0 when BSDF sampling
                     // cannot produce this light (MIS weight 1)
+    uint light;     // the punctual light sampled (index into lights[]); NO_LIGHT for others
+    float seen;     // for a resampled light drawn from the light grid, the factor its learned
+                    // visibility puts on resampling targets (light_grid_seen); 1 otherwise
 };
 
 NeeSample nee_none() {
@@ -193,6 +196,8 @@ NeeSample nee_none() {
     s.dist = 0.0;
     s.weight = vec3(0.0);
     s.pdf = 0.0;
+    s.light = NO_LIGHT;
+    s.seen = 1.0;
     return s;
 }
 
@@ -238,14 +243,20 @@ NeeSample sample_disk_light(LightInfo light, vec3 p, vec2 u, float pmf) {
 
 NeeSample sample_punctual_light(uint index, vec3 p, vec2 u, float pmf) {
     LightInfo light = lights[index];
-    if (light.radius > 0.0 && light.type == LIGHT_POINT) return sample_sphere_light(light, p, u, pmf);
-    if (light.radius > 0.0 && light.type == LIGHT_SPOT) return sample_disk_light(light, p, u, pmf);
-    LightSample ls = sample_punctual(light, p);
     NeeSample s;
-    s.dir = ls.dir;
-    s.dist = ls.dist >= LIGHT_FAR ? LIGHT_FAR : ls.dist;
-    s.weight = ls.radiance / pmf;
-    s.pdf = 0.0;
+    if (light.radius > 0.0 && light.type == LIGHT_POINT) {
+        s = sample_sphere_light(light, p, u, pmf);
+    } else if (light.radius > 0.0 && light.type == LIGHT_SPOT) {
+        s = sample_disk_light(light, p, u, pmf);
+    } else {
+        LightSample ls = sample_punctual(light, p);
+        s.dir = ls.dir;
+        s.dist = ls.dist >= LIGHT_FAR ? LIGHT_FAR : ls.dist;
+        s.weight = ls.radiance / pmf;
+        s.pdf = 0.0;
+    }
+    s.light = index;
+    s.seen = 1.0;
     return s;
 }
 
@@ -263,6 +274,8 @@ NeeSample sample_emitter(uint index, vec3 p, vec2 u, float pmf) {
     if (cos_l <= 0.0) return nee_none();
     s.pdf = pmf * dist2 / (cos_l * e.area);
     s.weight = emitter_emission(e.instance, e.primitive, bary) / s.pdf;
+    s.light = NO_LIGHT;
+    s.seen = 1.0;
     return s;
 }
 
@@ -273,6 +286,8 @@ NeeSample sample_environment(vec2 u, float pmf) {
     s.dist = LIGHT_FAR;
     s.pdf = pmf * pdf;
     s.weight = env_eval(s.dir) / s.pdf;
+    s.light = NO_LIGHT;
+    s.seen = 1.0;
     return s;
 }
 
@@ -294,6 +309,7 @@ uint light_entry_search(float u) {
 // outside the grid, their sub-range [lo, hi) of the table's CDF. Only where such lights exist.
 struct ResampledLights {
     bool in_grid;
+    uint cell_index;
     uvec2 cell;
     float lo;
     float hi;
@@ -301,17 +317,20 @@ struct ResampledLights {
 
 ResampledLights resampled_lights_at(vec3 p) {
     ResampledLights r;
-    r.in_grid = light_grid_cell(p, r.cell);
+    r.in_grid = light_grid_cell_index(p, r.cell_index);
+    r.cell = r.in_grid ? light_grid_cells[r.cell_index] : uvec2(0u);
     r.lo = light_entries[SHADOWED_LIGHTS - 1u].cdf;
     r.hi = light_entries[frame.light_count - 1u].cdf;
     return r;
 }
 
 // A resampled light for u in [0, 1) and the probability of choosing it among the resampled
-// lights; NO_LIGHT when none can reach the point.
-uint resampled_light_pick(ResampledLights r, float u, out float pmf) {
-    if (r.in_grid) return light_grid_pick(r.cell, u, pmf);
+// lights; NO_LIGHT when none can reach the point. `seen` as light_grid_pick's (1 outside the
+// grid).
+uint resampled_light_pick(ResampledLights r, float u, out float pmf, out float seen) {
+    if (r.in_grid) return light_grid_pick(r.cell_index, r.cell, u, pmf, seen);
     pmf = 0.0;
+    seen = 1.0;
     if (!(r.hi > r.lo)) return NO_LIGHT;  // the resampled lights have no power
     uint entry = light_entry_search(r.lo + u * (r.hi - r.lo));
     // Rounding can put lo + u (hi - lo) on hi itself; such a draw selects nothing.
@@ -330,10 +349,12 @@ NeeSample light_sample(vec3 p, vec3 u) {
         // lights as a whole, hi - lo, stays as the table has it, so the other lights' densities
         // (and MIS against them) do not change.
         ResampledLights r = resampled_lights_at(p);
-        float pmf;
-        uint light = resampled_light_pick(r, clamp((u.x - r.lo) / (r.hi - r.lo), 0.0, 0.99999994), pmf);
+        float pmf, seen;
+        uint light = resampled_light_pick(r, clamp((u.x - r.lo) / (r.hi - r.lo), 0.0, 0.99999994), pmf, seen);
         if (light == NO_LIGHT) return nee_none();
-        return sample_punctual_light(light, p, u.yz, (r.hi - r.lo) * pmf);
+        NeeSample s = sample_punctual_light(light, p, u.yz, (r.hi - r.lo) * pmf);
+        s.seen = seen;
+        return s;
     }
     if (e.kind == LIGHT_KIND_PUNCTUAL) return sample_punctual_light(e.index, p, u.yz, e.pmf);
     if (e.kind == LIGHT_KIND_EMITTER) return sample_emitter(e.index, p, u.yz, e.pmf);

@@ -273,6 +273,10 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
             }
             // Light and cell rays cross see-through surfaces, scaled by what passes them.
             Hit h = trace_ray(o, d, 0.0, tmax, RAY_MASK_ALL, ray != RC_RAY_NEXT);
+#ifdef LIGHT_GRID_LEARN
+            // A resampled light's shadow ray teaches the light grid what this cell sees.
+            if (ray == RC_RAY_LIGHT) light_grid_learn(leave, ls.light, h.instance == NO_HIT);
+#endif
             if (ray == RC_RAY_LIGHT && h.instance == NO_HIT) {
                 // Full weight: a BRDF-sampled ray counts emission only through a specular lobe,
                 // which the light sample then leaves out.

@@ -9,6 +9,7 @@ pub mod gi;
 pub mod gi_fill;
 pub mod history;
 pub mod inject;
+pub mod light_grid_update;
 pub mod pathtrace;
 pub mod primary_rays;
 pub mod radiance_cache;

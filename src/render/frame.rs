@@ -1,6 +1,6 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
-//! gbuffer -> [primary_rays] -> shadows chain -> [radiance_cache] -> gi -> [gi_fill] -> reflections ->
+//! gbuffer -> [primary_rays] -> shadows chain -> [light_grid_update] -> [radiance_cache] -> gi -> [gi_fill] -> reflections ->
 //! [svgf_guide, svgf chains: diffuse on gi, specular on reflections, filtered together] ->
 //! composite -> [taa] -> tonemap -> history.
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
@@ -39,6 +39,11 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows)?;
     passes.extend(shadows.passes);
     kept.extend(shadows.kept);
+    // gi's shadow rays toward the resampled lights teach the light grid what its cells see; the
+    // update comes before any pass draws from the grid.
+    if plan.gi && plan.resampled_lights > 0 && settings.light_grid {
+        passes.push(Box::new(passes::light_grid_update::new(b)?));
+    }
     // The cache answers where gi's and the reflections' rays end; with it off they trace on.
     let cache = Arc::new(radiance_cache::Cache::new(b.ctx, &settings.radiance_cache, plan.scene_diagonal)?);
     let cache_used = settings.radiance_cache.enabled && (plan.gi || plan.reflections);

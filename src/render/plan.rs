@@ -115,9 +115,10 @@ impl FramePlan {
                 "many lights: {} punctual lights; the {} brightest ({}) keep a visibility of their own \
                  (exact, noise-free); the other {resampled_lights} are resampled in gi: per pixel one light \
                  from {} candidates drawn from a light grid (a cell lists the lights that reach it, \
-                 weighed by what they can bring there) and last frame's choice, weighted by its unshadowed \
-                 contribution, with shadow rays (ReSTIR-style temporal reuse); the cost per pixel does not \
-                 grow with the number of lights",
+                 weighed by what they can bring there and by how often gi's shadow rays from the cell \
+                 reach their group of lights: light_grid_update) and last frame's choice, weighted by its \
+                 unshadowed contribution and that visibility, with shadow rays (ReSTIR-style temporal \
+                 reuse); the cost per pixel does not grow with the number of lights",
                 light_order.len(),
                 shadowed.len(),
                 list(&names),

@@ -15,6 +15,16 @@
 //! bounds it was built for) draw from all the resampled lights by power, as before. Lights
 //! without a range and directional lights are listed in every cell (spots: where their cone
 //! reaches).
+//!
+//! The grid knows distances, not walls: a room full of lights without a range is listed, and
+//! drawn, in every cell of the room next door. So the hybrid frame learns what each cell sees.
+//! The lights are sorted into groups by position (a [`GROUPS_PER_SIDE`]^3 grid over the same
+//! bounds, and one group for directional lights); gi counts its shadow rays per cell and group
+//! and the share that reach a light (set-0 binding 21, [`GpuLightGridVisibility`]), and the
+//! `light_grid_update` pass (src/passes/light_grid_update.rs) reweighs each entry by its
+//! group's visibility from the cell before the next frame draws from it. A group pools the rays
+//! of its lights, since one light among hundreds is drawn too rarely to be learned alone. A
+//! listed light keeps at least a hundredth of its bound, so the choice stays unbiased.
 
 use super::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
 use bytemuck::{Pod, Zeroable};
@@ -25,7 +35,13 @@ use std::f32::consts::PI;
 /// the same size as they need. Mirrors nothing in GLSL (the header carries the sizes).
 pub const RESOLUTION: u32 = 16;
 
-/// The most entries a grid may hold (24 MB): past it, a coarser grid. A scene of a few thousand
+/// Light groups along each side of the bounds: a group's lights share one visibility estimate
+/// per cell. Coarse, so that each group's estimate gets rays enough to learn from.
+pub const GROUPS_PER_SIDE: u32 = 4;
+/// The groups by position, then the directional lights' own.
+pub const GROUP_COUNT: u32 = GROUPS_PER_SIDE * GROUPS_PER_SIDE * GROUPS_PER_SIDE + 1;
+
+/// The most entries a grid may hold (40 MB): past it, a coarser grid. A scene of a few thousand
 /// lights without a range would otherwise list every one of them in each of 4096 cells.
 pub const MAX_ENTRIES: usize = 1 << 21;
 
@@ -37,7 +53,8 @@ pub struct GpuLightGridHeader {
     /// 0: no grid; every point draws from all the resampled lights.
     pub cell_count: u32,
     pub inv_cell: [f32; 3],
-    pub pad0: u32,
+    /// Light groups (the visibility buffer holds `cell_count x group_count` estimates).
+    pub group_count: u32,
     pub dims: [u32; 3],
     pub pad1: u32,
 }
@@ -50,6 +67,26 @@ pub struct GpuLightGridEntry {
     /// Probability of choosing this entry or an earlier one of the cell (the cell's last is 1).
     pub cdf: f32,
     pub pmf: f32,
+    /// The weight the CDF is built from before visibility: a bound on what the light delivers.
+    pub bound: f32,
+    /// The light's group (see the module's documentation).
+    pub group: u32,
+}
+
+/// Mirrors `LightGridVisibility`: per cell and light group, the share of the shadow rays from
+/// the cell toward the group's lights that reached them (learned on the GPU), and the frame's
+/// counts behind the next estimate.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLightGridVisibility {
+    pub visible: f32,
+    pub rays: u32,
+    pub reached: u32,
+}
+
+impl GpuLightGridVisibility {
+    /// Before any ray: every group taken as visible, which leaves the bound's CDF as it is.
+    pub const UNKNOWN: Self = Self { visible: 1.0, rays: 0, reached: 0 };
 }
 
 /// A built grid: the header, per cell (first entry, entry count), and the entries.
@@ -125,6 +162,16 @@ impl LightGrid {
             }
         }
 
+        let group_size = extent / GROUPS_PER_SIDE as f32;
+        let group_of = |light: &GpuLight| {
+            if light.kind == LIGHT_DIRECTIONAL {
+                return GROUP_COUNT - 1;
+            }
+            let max = (GROUPS_PER_SIDE - 1) as f32;
+            let g = ((Vec3::from(light.position) - lo) / group_size).floor().clamp(Vec3::ZERO, Vec3::splat(max));
+            let g = g.as_uvec3();
+            (g.z * GROUPS_PER_SIDE + g.y) * GROUPS_PER_SIDE + g.x
+        };
         let mut cells = Vec::with_capacity(cell_count);
         let mut entries = Vec::new();
         for list in &lists {
@@ -134,14 +181,15 @@ impl LightGrid {
             for (k, &(light, w)) in list.iter().enumerate() {
                 acc += w as f64;
                 let cdf = if k + 1 == list.len() { 1.0 } else { (acc / total) as f32 };
-                entries.push(GpuLightGridEntry { light, cdf, pmf: (w as f64 / total) as f32 });
+                let group = group_of(&lights[light as usize]);
+                entries.push(GpuLightGridEntry { light, cdf, pmf: (w as f64 / total) as f32, bound: w, group });
             }
         }
         let header = GpuLightGridHeader {
             lo: lo.to_array(),
             cell_count: cell_count as u32,
             inv_cell: (1.0 / size).to_array(),
-            pad0: 0,
+            group_count: GROUP_COUNT,
             dims: dims.to_array(),
             pad1: 0,
         };
@@ -296,6 +344,33 @@ mod tests {
             assert_eq!(e.last().map(|e| e.cdf), Some(1.0), "cell {cell}");
             let sum: f32 = e.iter().map(|e| e.pmf).sum();
             assert!((sum - 1.0).abs() < 1e-5 && e.iter().all(|e| e.pmf > 0.0), "cell {cell}");
+        }
+    }
+
+    #[test]
+    fn lights_are_grouped_by_where_they_are() {
+        let bounds = (Vec3::ZERO, Vec3::splat(16.0));
+        // Light 0 is shadowed; 1 and 2 share a corner of the bounds, 3 is at the far corner,
+        // 4 is directional.
+        let lights = vec![
+            point(Vec3::splat(8.0), 0.0),
+            point(Vec3::splat(1.0), 0.0),
+            point(Vec3::splat(2.0), 0.0),
+            point(Vec3::splat(15.0), 0.0),
+            GpuLight { kind: LIGHT_DIRECTIONAL, ..point(Vec3::ZERO, 0.0) },
+        ];
+        let grid = LightGrid::build(&lights, &[1.0; 5], 1, bounds, RESOLUTION, usize::MAX).unwrap();
+        assert_eq!(grid.header.group_count, GROUP_COUNT);
+        let group = |light: u32| grid.entries.iter().find(|e| e.light == light).map(|e| e.group).unwrap();
+        assert_eq!(group(1), 0);
+        assert_eq!(group(1), group(2));
+        assert_eq!(group(3), GROUP_COUNT - 2);
+        assert_eq!(group(4), GROUP_COUNT - 1);
+        // A light keeps its group in every cell that lists it, and every entry starts with the
+        // CDF of its bound.
+        for e in &grid.entries {
+            assert_eq!(e.group, group(e.light));
+            assert!(e.bound > 0.0);
         }
     }
 

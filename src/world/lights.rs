@@ -17,7 +17,7 @@
 //! light that can contribute keeps the estimate unbiased.
 
 use super::environment::{EnvironmentData, luminance};
-use super::light_grid::{self, GpuLightGridEntry, GpuLightGridHeader, LightGrid};
+use super::light_grid::{self, GpuLightGridEntry, GpuLightGridHeader, GpuLightGridVisibility, LightGrid};
 use super::scene_gpu::{GpuLight, binding};
 use crate::gpu::{self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, vk};
 use crate::scene::{LightKind, Pose, Scene};
@@ -81,6 +81,7 @@ pub fn bindings() -> Vec<Binding> {
         binding::ENV_CDF,
         binding::LIGHT_GRID,
         binding::LIGHT_GRID_ENTRIES,
+        binding::LIGHT_GRID_VISIBILITY,
     ]
     .into_iter()
     .map(|b| Binding { binding: b, kind: BindingKind::StorageBuffer, count: 1 })
@@ -98,7 +99,12 @@ pub struct LightTables {
     /// when the punctual lights change.
     grid: Buffer,
     grid_entries: Buffer,
+    /// Per cell and light group, the visibility the hybrid frame learns
+    /// (src/passes/light_grid_update.rs); reset with every rebuild of the grid.
+    grid_visibility: Buffer,
     grid_capacity: usize,
+    /// The header of the grid last written (where its cells are).
+    grid_header: GpuLightGridHeader,
     /// The grid built at load to size `grid_entries`, with the lights and bounds it was built
     /// for: the first `update_grid` (SceneGpu::upload's, for the same pose) writes it instead of
     /// building it again (4000 lights without a range: 2M entries, about 70 ms on 2 cores).
@@ -183,6 +189,15 @@ impl LightTables {
             storage,
             MemoryLocation::CpuToGpu,
         )?;
+        let visibility_count =
+            if grid_enabled { light_grid::RESOLUTION.pow(3) * light_grid::GROUP_COUNT } else { 1 } as usize;
+        let grid_visibility = Buffer::new(
+            ctx,
+            "lights.grid_visibility",
+            (visibility_count * size_of::<GpuLightGridVisibility>()) as u64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
         let mut tables = Self {
             table,
             emitters,
@@ -191,7 +206,9 @@ impl LightTables {
             env_cdf,
             grid,
             grid_entries,
+            grid_visibility,
             grid_capacity,
+            grid_header: GpuLightGridHeader::default(),
             grid_at_load,
             grid_enabled,
             emissive: emissive_instances(scene),
@@ -213,6 +230,12 @@ impl LightTables {
         set.write_buffer(binding::ENV_CDF, BindingKind::StorageBuffer, &self.env_cdf);
         set.write_buffer(binding::LIGHT_GRID, BindingKind::StorageBuffer, &self.grid);
         set.write_buffer(binding::LIGHT_GRID_ENTRIES, BindingKind::StorageBuffer, &self.grid_entries);
+        set.write_buffer(binding::LIGHT_GRID_VISIBILITY, BindingKind::StorageBuffer, &self.grid_visibility);
+    }
+
+    /// Where the light grid's cells are (no cells: no grid), as last written.
+    pub fn grid_header(&self) -> GpuLightGridHeader {
+        self.grid_header
     }
 
     /// Rebuilds the light grid for the punctual lights as written this frame, over the scene's
@@ -245,9 +268,13 @@ impl LightTables {
             grid.entries.len(),
             lights.len().saturating_sub(SHADOWED_LIGHTS)
         );
+        self.grid_header = grid.header;
         self.grid.write(0, bytemuck::bytes_of(&grid.header))?;
         self.grid.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(&grid.cells))?;
         self.grid_entries.write(0, bytemuck::cast_slice(&grid.entries))?;
+        // What was learned belongs to the old cells.
+        let keys = (grid.header.cell_count * grid.header.group_count) as usize;
+        self.grid_visibility.write(0, bytemuck::cast_slice(&vec![GpuLightGridVisibility::UNKNOWN; keys]))?;
         Ok(())
     }
 

@@ -7,7 +7,7 @@
 pub mod brdf;
 mod deform;
 pub mod environment;
-mod light_grid;
+pub mod light_grid;
 pub mod lights;
 mod mips;
 pub mod scene_gpu;

@@ -45,6 +45,8 @@ pub mod binding {
     /// then the cells' entries.
     pub const LIGHT_GRID: u32 = 19;
     pub const LIGHT_GRID_ENTRIES: u32 = 20;
+    /// What the hybrid frame learned each cell to see of each group of lights.
+    pub const LIGHT_GRID_VISIBILITY: u32 = 21;
 }
 
 #[repr(C)]
