@@ -40,7 +40,7 @@
 #include "common/gbuffer.glsl"
 #include "common/reflection_motion.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 8, local_size_y = 8) in;  // the tile below assumes 8x8
 
 layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 // The geometric (face) normal: reprojection asks whether the previous sample lies on the same
@@ -130,6 +130,41 @@ bool load_finite(int s, ivec2 q, out vec3 c) {
     return false;
 }
 
+// The workgroup's windows, loaded once into shared memory: the 8x8 pixels' 7x7 windows cover a
+// 14x14 tile, whose guide texels, finite input samples and their luminances the workgroup loads
+// together (about 3 image loads a pixel for both signals) before any pixel walks its window
+// from the tile, where each tap had loaded its own texels (72 loads a pixel for the 5x5
+// window). On lavapipe at 640x360 the pass went from 62-69 to 56-60 ms; the tile alone, with
+// the luminance computed per tap, saved nothing: the walk is bound by its arithmetic as much
+// as by its loads. Texels past the image's edge hold the edge's (the clamp's walk wants that;
+// the young history's walk skips them).
+#define WINDOW_RADIUS 3
+#define TILE_SIDE (8 + 2 * WINDOW_RADIUS)
+shared vec4 tile_guide[TILE_SIDE * TILE_SIDE];
+shared vec3 tile_sample[SIGNALS][TILE_SIDE * TILE_SIDE];
+shared float tile_luminance[SIGNALS][TILE_SIDE * TILE_SIDE];
+
+void load_tile() {
+    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - WINDOW_RADIUS;
+    for (uint i = gl_LocalInvocationIndex; i < TILE_SIDE * TILE_SIDE; i += 64u) {
+        ivec2 q = clamp(origin + ivec2(i % TILE_SIDE, i / TILE_SIDE), ivec2(0), ivec2(frame.size) - 1);
+        tile_guide[i] = imageLoad(in_guide, q);
+        [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+            vec3 v;
+            load_finite(s, q, v);
+            tile_sample[s][i] = v;
+            tile_luminance[s][i] = luminance(v);
+        }
+    }
+    barrier();
+}
+
+// The tile's index of the pixel at offset d from this invocation's.
+int tile_index(ivec2 d) {
+    ivec2 t = ivec2(gl_LocalInvocationID.xy) + WINDOW_RADIUS + d;
+    return t.y * TILE_SIDE + t.x;
+}
+
 // What the 7x7 neighbourhood of this frame's samples says about pixel `px`, per signal.
 struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
@@ -176,11 +211,11 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
         any_blur = any_blur || blur[s];
     }
     float sum[SIGNALS], sum2[SIGNALS], n[SIGNALS], brightest[SIGNALS], n_same[SIGNALS];
-    vec3 brightest_same[SIGNALS];  // the brightest neighbour on this pixel's surface
+    int brightest_same[SIGNALS];  // the brightest neighbour on this pixel's surface (tile index)
     float brightest_same_l[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         sum[s] = sum2[s] = n[s] = brightest[s] = n_same[s] = brightest_same_l[s] = 0.0;
-        brightest_same[s] = vec3(0.0);
+        brightest_same[s] = 0;
     }
     // A young history's window is 7x7 (its spatial variance needs it), an established one's 5x5.
     int radius = any_young ? 3 : 2;
@@ -188,16 +223,14 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
         for (int dx = -radius; dx <= radius; ++dx) {
             // The centre is left out, so a lone firefly cannot widen its own bound.
             if (dx == 0 && dy == 0) continue;
-            ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
-            vec4 gq = imageLoad(in_guide, q);
+            int t = tile_index(ivec2(dx, dy));
+            vec4 gq = tile_guide[t];
             if (!svgf_guide_surface(gq)) continue;
             bool inner = max(abs(dx), abs(dy)) <= 2;
             bool same = any_established && dot(g.xyz, gq.xyz) > 0.9 && abs(gq.w - g.w) < 0.05 * g.w;
             [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
                 if (young[s] || inner) {
-                    vec3 v;
-                    load_finite(s, q, v);
-                    float l = luminance(v);
+                    float l = tile_luminance[s][t];
                     sum[s] += l;
                     sum2[s] += l * l;
                     n[s] += 1.0;
@@ -206,7 +239,7 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
                         n_same[s] += 1.0;
                         if (l > brightest_same_l[s]) {
                             brightest_same_l[s] = l;
-                            brightest_same[s] = v;
+                            brightest_same[s] = t;
                         }
                     }
                 }
@@ -222,7 +255,7 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
             float k = spread ? SVGF_ESTABLISHED_SIGMA_SCALE * svgf.clamp_sigma : svgf.clamp_sigma;
             nb[s].clamp_limit = mean + k * sqrt(max(0.0, (sum2[s] - trim * trim) / m - mean * mean));
             if (brightest_same_l[s] > nb[s].clamp_limit) {
-                nb[s].spread = brightest_same[s] * (1.0 - nb[s].clamp_limit / brightest_same_l[s]) / n_same[s];
+                nb[s].spread = tile_sample[s][brightest_same[s]] * (1.0 - nb[s].clamp_limit / brightest_same_l[s]) / n_same[s];
             }
         }
     }
@@ -240,22 +273,22 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
         for (int dx = -3; dx <= 3; ++dx) {
             ivec2 q = px + ivec2(dx, dy);
             if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
-            vec4 gq = imageLoad(in_guide, q);
+            int t = tile_index(ivec2(dx, dy));
+            vec4 gq = tile_guide[t];
             if (!svgf_guide_surface(gq)) continue;
             float inv_z_scale = 1.0 / (svgf.sigma_z * fwidth_z * length(vec2(dx, dy)) + 1e-4);
             float e_geometry = svgf_depth_exponent(g.w, gq.w, inv_z_scale) + svgf_normal_exponent(g.xyz, gq.xyz);
             bool same_instance = any_blur && imageLoad(g_ids, q).x == id;
             [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
                 if (young[s]) {
-                    vec3 v;
-                    load_finite(s, q, v);
-                    float lq_raw = luminance(v);
+                    float lq_raw = tile_luminance[s][t];
                     float lq = min(lq_raw, nb[s].clamp_limit);
                     // The luminance weight uses a fixed scale: there is no variance to scale it yet.
                     float w = exp(-e_geometry - abs(l[s] - lq) / svgf.sigma_l);
                     m[s] += w * vec2(lq, lq * lq);
                     wsum[s] += w;
                     if (blur[s] && same_instance) {
+                        vec3 v = tile_sample[s][t];
                         blurred[s] += w * (lq_raw > lq ? v * (lq / lq_raw) : v);
                         blur_wsum[s] += w;
                     }
@@ -299,6 +332,7 @@ vec4 reprojection_weights(vec2 prev_pos, float z, float fw_tolerance, vec3 ng, u
 }
 
 void main() {
+    load_tile();  // before any invocation returns: the whole workgroup reaches its barrier
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     uint id = imageLoad(g_ids, px).x;
@@ -380,7 +414,7 @@ void main() {
         young[s] = len[s] < SVGF_MOMENTS_FRAMES;
     }
     Neighbourhood nb[SIGNALS];
-    neighbourhood(px, imageLoad(in_guide, px), id, fw, c, young, blur, nb);
+    neighbourhood(px, tile_guide[tile_index(ivec2(0))], id, fw, c, young, blur, nb);
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         vec3 cs = c[s];
         float l = luminance(cs);
