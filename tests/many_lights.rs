@@ -292,19 +292,55 @@ fn mean_luminance_matches_the_reference() {
 /// groups of lights wholly behind it that shadow rays tested have been found hidden, and the
 /// camera room's own groups seen by every ray. Lights are grouped by position on a 4 x 4 x 4 grid over the bounds, so
 /// groups 0-1 along x lie in the camera's room and 2-3 behind the wall. A group that no ray from
-/// a cell has tested keeps the estimate 1; the test needs the hidden ones tested.
+/// a cell has tested keeps the estimate 1; the test needs the hidden ones tested. Then the hidden
+/// room's lights dim, which rebuilds the grid over the same cells: what was learned stays.
 #[test]
 fn the_light_grid_learns_that_the_wall_hides_the_other_room() {
     let ctx = common::validated_context();
     let backend = backends(&ctx)[0];
     let mut r = common::renderer(&ctx, many_lights(), settings(true), backend);
     common::render_frames(&mut r, 16);
+    let (before, own_min) = learned(&mut r);
+    let hidden_mean = mean(&before);
+    eprintln!(
+        "{backend:?}: {} (camera cell, hidden group) pairs tested, mean estimate {hidden_mean:.4}; least estimate of \
+         a camera-room group {own_min:.4}",
+        before.len(),
+    );
+    assert!(before.len() > 100, "only {} (cell, hidden group) pairs were tested", before.len());
+    // Measured 0.35: an estimate falls as 4 / (4 + n) with n rays blocked, and at 64x64 a
+    // (cell, group) pair gets a few a frame. A ray that got through would put it near 1.
+    assert!(hidden_mean < 0.5, "the hidden room's groups are still taken as seen: {hidden_mean}");
+    assert!(own_min > 0.99, "a camera-room group is taken as hidden from a camera-room cell: {own_min}");
+
+    // The hidden room's lights dim: the grid is rebuilt over the same cells and keeps what it
+    // learned (reset, one frame's rays would leave the estimates near 1).
+    for l in r.scene.lights.iter_mut().filter(|l| hidden(&l.name)) {
+        l.intensity *= 0.5;
+    }
+    common::render_frames(&mut r, 1);
+    let (after, _) = learned(&mut r);
+    let after_mean = mean(&after);
+    eprintln!("after the hidden lights dimmed: {} pairs, mean estimate {after_mean:.4}", after.len());
+    assert!(after.len() > 100, "only {} (cell, hidden group) pairs were tested after the change", after.len());
+    assert!(
+        after_mean < hidden_mean + 0.05,
+        "the light change forgot what was learned: mean estimate {hidden_mean} before, {after_mean} after"
+    );
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+/// What the light grid has learned, from the cells wholly on the camera's side of the wall:
+/// the estimates of the hidden room's groups that have been tested (below 1), and the least
+/// estimate of the camera room's groups.
+fn learned(r: &mut hybrid_rt::render::Renderer) -> (Vec<f64>, f32) {
     let visibility = r.read_outputs(&[light_grid_update::VISIBILITY]).unwrap().remove(0);
     let h = r.scene_gpu.light_tables.grid_header();
     let lo = Vec3::from(h.lo);
     let cell = 1.0 / Vec3::from(h.inv_cell);
     let group = cell * UVec3::from(h.dims).as_vec3() / GROUPS_PER_SIDE as f32;
-    let (mut hidden, mut own) = (Vec::new(), Vec::new());
+    let (mut hidden, mut own_min) = (Vec::new(), f32::INFINITY);
     for c in 0..h.cell_count {
         let cell_x = lo.x + (c % h.dims[0]) as f32 * cell.x;
         if cell_x + cell.x > -facts::WALL {
@@ -314,23 +350,11 @@ fn the_light_grid_learns_that_the_wall_hides_the_other_room() {
             let group_x = lo.x + (g % GROUPS_PER_SIDE) as f32 * group.x;
             let v = visibility.get(g, c, 0);
             if group_x >= -1e-3 && v < 1.0 {
-                hidden.push(v);
+                hidden.push(v as f64);
             } else if group_x + group.x <= 1e-3 {
-                own.push(v);
+                own_min = own_min.min(v);
             }
         }
     }
-    let hidden_mean = hidden.iter().sum::<f32>() / hidden.len().max(1) as f32;
-    let own_min = own.iter().copied().fold(f32::INFINITY, f32::min);
-    eprintln!(
-        "{backend:?}: {} (camera cell, hidden group) pairs tested, mean estimate {hidden_mean:.4}; {} with the camera \
-         room's groups, least estimate {own_min:.4}",
-        hidden.len(),
-        own.len()
-    );
-    assert!(hidden.len() > 100, "only {} (cell, hidden group) pairs were tested", hidden.len());
-    // Measured 0.35: an estimate falls as 4 / (4 + n) with n rays blocked, and at 64x64 a
-    // (cell, group) pair gets a few a frame. A ray that got through would put it near 1.
-    assert!(hidden_mean < 0.5, "the hidden room's groups are still taken as seen: {hidden_mean}");
-    assert!(own_min > 0.99, "a camera-room group is taken as hidden from a camera-room cell: {own_min}");
+    (hidden, own_min)
 }

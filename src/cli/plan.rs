@@ -21,7 +21,8 @@ pub struct PlanArgs {
 
 pub fn run(a: &PlanArgs) -> Result<()> {
     let scene = a.scene.load()?;
-    let plan = FramePlan::for_scene(&scene, Settings::default().reflections.roughness_cutoff);
+    let defaults = Settings::default();
+    let plan = FramePlan::for_scene(&scene, defaults.reflections.roughness_cutoff, defaults.light_grid);
     let lighting = default_light::choose(&a.environment.environment(), &scene);
     if a.json {
         #[derive(serde::Serialize)]

@@ -207,7 +207,7 @@ impl Renderer {
         let plan = if settings.full {
             plan::FramePlan::full(&scene)
         } else {
-            plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff)
+            plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff, settings.light_grid)
         };
         // The culled lights out, the rest in shading order (the shadowed ones first).
         scene.lights = plan.light_order.iter().map(|&i| scene.lights[i].clone()).collect();

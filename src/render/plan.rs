@@ -61,7 +61,9 @@ impl FramePlan {
         }
     }
 
-    pub fn for_scene(scene: &Scene, roughness_cutoff: f32) -> Self {
+    /// `light_grid`: the resampled lights' candidates are drawn from the light grid
+    /// (`Settings::light_grid`), which only the reason's text depends on.
+    pub fn for_scene(scene: &Scene, roughness_cutoff: f32, light_grid: bool) -> Self {
         let mut reasons = Vec::new();
 
         let glossy: Vec<&str> = scene
@@ -111,18 +113,24 @@ impl FramePlan {
         let resampled_lights = light_order.len() - shadowed.len();
         reasons.push(if resampled_lights > 0 {
             let names: Vec<&str> = shadowed.iter().map(|&i| scene.lights[i].name.as_str()).collect();
+            let source = if light_grid {
+                "drawn from a light grid (a cell lists the lights that reach it, weighed by what they can \
+                 bring there and by how often gi's shadow rays from the cell reach their group of lights: \
+                 light_grid_update)"
+            } else {
+                "drawn by power from all of them (--no-light-grid: no grid, nothing learned)"
+            };
             format!(
                 "many lights: {} punctual lights; the {} brightest ({}) keep a visibility of their own \
                  (exact, noise-free); the other {resampled_lights} are resampled in gi: per pixel one light \
-                 from {} candidates drawn from a light grid (a cell lists the lights that reach it, \
-                 weighed by what they can bring there and by how often gi's shadow rays from the cell \
-                 reach their group of lights: light_grid_update) and last frame's choice, weighted by its \
-                 unshadowed contribution and that visibility, with shadow rays (ReSTIR-style temporal \
-                 reuse); the cost per pixel does not grow with the number of lights",
+                 from {} candidates {source} and last frame's choice, weighted by its unshadowed \
+                 contribution{}, with shadow rays (ReSTIR-style temporal reuse); the cost per pixel does \
+                 not grow with the number of lights",
                 light_order.len(),
                 shadowed.len(),
                 list(&names),
                 RIS_CANDIDATES,
+                if light_grid { " and that visibility" } else { "" },
             )
         } else {
             format!(
@@ -236,9 +244,9 @@ mod tests {
 
     #[test]
     fn punctual_only_scenes_get_hard_shadows_and_matte_ones_no_reflection_rays() {
-        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6);
+        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true);
         assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true);
         assert!(p.soft_shadows);
     }
 
@@ -258,18 +266,18 @@ mod tests {
         });
         far.node = node;
         s.lights.push(far);
-        let p = FramePlan::for_scene(&s, 0.6);
+        let p = FramePlan::for_scene(&s, 0.6, true);
         assert_eq!(p.culled_lights, vec![1], "{:?}", p.reasons);
         // The same light in reach stays.
         s.nodes[node as usize].translation = Vec3::new(0.0, 1.5, 0.0);
-        assert!(FramePlan::for_scene(&s, 0.6).culled_lights.is_empty());
-        assert_eq!(FramePlan::for_scene(&s, 0.6).light_order, vec![0, 1]);
+        assert!(FramePlan::for_scene(&s, 0.6, true).culled_lights.is_empty());
+        assert_eq!(FramePlan::for_scene(&s, 0.6, true).light_order, vec![0, 1]);
     }
 
     #[test]
     fn lights_past_the_shadowed_four_are_resampled_and_the_plan_names_the_four() {
         let s = crate::scene::builtin_many_lights::many_lights();
-        let p = FramePlan::for_scene(&s, 0.6);
+        let p = FramePlan::for_scene(&s, 0.6, true);
         // (The camera room's highest lights reach no surface with their short range: culled.)
         assert_eq!(p.light_order.len(), s.lights.len() - p.culled_lights.len());
         assert_eq!(p.resampled_lights, p.light_order.len() - MAX_SHADOWED_LIGHTS);
@@ -278,8 +286,13 @@ mod tests {
         for &i in &p.light_order[..MAX_SHADOWED_LIGHTS] {
             assert!(line.contains(&s.lights[i].name), "{line}");
         }
+        assert!(line.contains("light_grid_update"), "{line}");
+        // Without the light grid the line says where the candidates come from instead.
+        let p = FramePlan::for_scene(&s, 0.6, false);
+        let line = p.reasons.iter().find(|r| r.starts_with("many lights")).expect("no many-lights line");
+        assert!(line.contains("--no-light-grid") && !line.contains("light_grid_update"), "{line}");
         // Four lights or fewer: none resampled, the scene's order kept.
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true);
         assert_eq!((p.resampled_lights, p.light_order.clone()), (0, vec![0]));
     }
 }

@@ -100,7 +100,7 @@ pub struct LightTables {
     grid: Buffer,
     grid_entries: Buffer,
     /// Per cell and light group, the visibility the hybrid frame learns
-    /// (src/passes/light_grid_update.rs); reset with every rebuild of the grid.
+    /// (src/passes/light_grid_update.rs); reset when a rebuild moves the grid's cells.
     grid_visibility: Buffer,
     grid_capacity: usize,
     /// The header of the grid last written (where its cells are).
@@ -268,13 +268,20 @@ impl LightTables {
             grid.entries.len(),
             lights.len().saturating_sub(SHADOWED_LIGHTS)
         );
+        // What was learned is kept where the new grid has the same cells and groups (the same
+        // header: the bounds did not change): an estimate is what a cell sees of a region of the
+        // scene, which lights that moved, dimmed or went off within it do not change much, and
+        // one frame's rays correct it (light_grid_update's memory is 4 rays). Otherwise it
+        // belonged to the old cells. An animated light rebuilds the grid every frame, and would
+        // never learn anything if each rebuild forgot.
+        if bytemuck::bytes_of(&grid.header) != bytemuck::bytes_of(&self.grid_header) {
+            let keys = (grid.header.cell_count * grid.header.group_count) as usize;
+            self.grid_visibility.write(0, bytemuck::cast_slice(&vec![GpuLightGridVisibility::UNKNOWN; keys]))?;
+        }
         self.grid_header = grid.header;
         self.grid.write(0, bytemuck::bytes_of(&grid.header))?;
         self.grid.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(&grid.cells))?;
         self.grid_entries.write(0, bytemuck::cast_slice(&grid.entries))?;
-        // What was learned belongs to the old cells.
-        let keys = (grid.header.cell_count * grid.header.group_count) as usize;
-        self.grid_visibility.write(0, bytemuck::cast_slice(&vec![GpuLightGridVisibility::UNKNOWN; keys]))?;
         Ok(())
     }
 
