@@ -17,8 +17,8 @@ layout(local_size_x = 64) in;
 
 layout(set = 1, binding = 0, r32f) uniform writeonly image2D out_visibility;
 
-// The estimate's memory, in rays: it is (what it was x LIGHT_GRID_MEMORY_RAYS + rays that
-// reached) / (LIGHT_GRID_MEMORY_RAYS + rays). A frame with many more rays than this replaces
+// The estimate's memory, in rays: the share hidden is (what it was x LIGHT_GRID_MEMORY_RAYS +
+// rays blocked) / (LIGHT_GRID_MEMORY_RAYS + rays). A frame with many more rays than this replaces
 // it, so a group drawn often follows a moving occluder within a frame or two; a group drawn a
 // few times a frame averages over frames.
 #define LIGHT_GRID_MEMORY_RAYS 4.0
@@ -35,22 +35,23 @@ void main() {
     for (uint g = 0u; g < groups; ++g) {
         LightGridVisibility v = light_grid_visibility[c * groups + g];
         if (v.rays > 0u) {
-            v.visible = (v.visible * LIGHT_GRID_MEMORY_RAYS + float(v.reached)) / (LIGHT_GRID_MEMORY_RAYS + float(v.rays));
-            light_grid_visibility[c * groups + g] = LightGridVisibility(v.visible, 0u, 0u);
+            v.hidden = (v.hidden * LIGHT_GRID_MEMORY_RAYS + float(v.blocked)) / (LIGHT_GRID_MEMORY_RAYS + float(v.rays));
+            v.rays = v.blocked = 0u;
+            light_grid_visibility[c * groups + g] = v;
         }
-        imageStore(out_visibility, ivec2(g, c), vec4(v.visible));
+        imageStore(out_visibility, ivec2(g, c), vec4(1.0 - v.hidden));
     }
     uvec2 cell = light_grid_cells[c];
     uint end = cell.x + cell.y;
     float total = 0.0;
     for (uint i = cell.x; i < end; ++i) {
         LightGridEntry e = light_grid_entries[i];
-        total += e.bound * light_grid_visibility_factor(light_grid_visibility[c * groups + e.group].visible);
+        total += e.bound * light_grid_visibility_factor(light_grid_visibility[c * groups + e.group]);
     }
     float acc = 0.0;
     for (uint i = cell.x; i < end; ++i) {
         LightGridEntry e = light_grid_entries[i];
-        float w = e.bound * light_grid_visibility_factor(light_grid_visibility[c * groups + e.group].visible);
+        float w = e.bound * light_grid_visibility_factor(light_grid_visibility[c * groups + e.group]);
         acc += w;
         light_grid_entries[i].pmf = w / total;
         light_grid_entries[i].cdf = i + 1u == end ? 1.0 : acc / total;

@@ -41,13 +41,15 @@ struct LightGridEntry {
 };
 
 // Per cell and light group, what the shadow rays from the cell toward the group's lights
-// found: the running estimate of the share that reach them (1 until measured), and this
-// frame's count of rays and of those that reached a light (atomics; light_grid_update.comp
-// folds them into the estimate and zeroes them).
+// found: the running estimate of the share that something blocks (0 until measured), and this
+// frame's count of rays and of those blocked (atomics; light_grid_update.comp folds them into
+// the estimate and zeroes them). Counted as blocked rather than reached so that all zeros is
+// "nothing learned", what a rebuild of the grid resets the buffer to with a fill
+// (src/world/lights.rs).
 struct LightGridVisibility {
-    float visible;
+    float hidden;
     uint rays;
-    uint reached;
+    uint blocked;
 };
 
 // Each listed light keeps at least this share of its bound, however rarely its group is seen
@@ -55,8 +57,8 @@ struct LightGridVisibility {
 #define LIGHT_GRID_VISIBILITY_FLOOR 0.01
 
 // What a light's learned visibility scales its weight by, in the CDF and the resampling targets.
-float light_grid_visibility_factor(float visible) {
-    return LIGHT_GRID_VISIBILITY_FLOOR + (1.0 - LIGHT_GRID_VISIBILITY_FLOOR) * visible;
+float light_grid_visibility_factor(LightGridVisibility v) {
+    return LIGHT_GRID_VISIBILITY_FLOOR + (1.0 - LIGHT_GRID_VISIBILITY_FLOOR) * (1.0 - v.hidden);
 }
 
 // Per cell, (first entry, entry count).
@@ -104,7 +106,7 @@ uint light_grid_pick(uint index, uvec2 cell, float u, out float pmf, out float s
     }
     pmf = light_grid_entries[lo].pmf;
     uint key = index * light_grid.group_count + light_grid_entries[lo].group;
-    seen = light_grid_visibility_factor(light_grid_visibility[key].visible);
+    seen = light_grid_visibility_factor(light_grid_visibility[key]);
     return light_grid_entries[lo].light;
 }
 
@@ -135,7 +137,7 @@ bool light_grid_visibility_key(vec3 p, uint light, out uint key) {
 float light_grid_seen(vec3 p, uint light) {
     uint key;
     if (!light_grid_visibility_key(p, light, key)) return 1.0;
-    return light_grid_visibility_factor(light_grid_visibility[key].visible);
+    return light_grid_visibility_factor(light_grid_visibility[key]);
 }
 
 #ifdef LIGHT_GRID_LEARN
@@ -145,7 +147,7 @@ void light_grid_learn(vec3 p, uint light, bool reached) {
     uint key;
     if (!light_grid_visibility_key(p, light, key)) return;
     atomicAdd(light_grid_visibility[key].rays, 1u);
-    if (reached) atomicAdd(light_grid_visibility[key].reached, 1u);
+    if (!reached) atomicAdd(light_grid_visibility[key].blocked, 1u);
 }
 #endif
 

@@ -20,7 +20,7 @@
 //! drawn, in every cell of the room next door. So the hybrid frame learns what each cell sees.
 //! The lights are sorted into groups by position (a [`GROUPS_PER_SIDE`]^3 grid over the same
 //! bounds, and one group for directional lights); gi counts its shadow rays per cell and group
-//! and the share that reach a light (set-0 binding 21, [`GpuLightGridVisibility`]), and the
+//! and how many something blocked (set-0 binding 21, [`GpuLightGridVisibility`]), and the
 //! `light_grid_update` pass (src/passes/light_grid_update.rs) reweighs each entry by its
 //! group's visibility from the cell before the next frame draws from it. A group pools the rays
 //! of its lights, since one light among hundreds is drawn too rarely to be learned alone. A
@@ -74,19 +74,15 @@ pub struct GpuLightGridEntry {
 }
 
 /// Mirrors `LightGridVisibility`: per cell and light group, the share of the shadow rays from
-/// the cell toward the group's lights that reached them (learned on the GPU), and the frame's
-/// counts behind the next estimate.
+/// the cell toward the group's lights that something blocked (learned on the GPU), and the
+/// frame's counts behind the next estimate. All zeros, as a fill leaves it: nothing learned,
+/// every group taken as seen, which leaves the bound's CDF as it is.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuLightGridVisibility {
-    pub visible: f32,
+    pub hidden: f32,
     pub rays: u32,
-    pub reached: u32,
-}
-
-impl GpuLightGridVisibility {
-    /// Before any ray: every group taken as visible, which leaves the bound's CDF as it is.
-    pub const UNKNOWN: Self = Self { visible: 1.0, rays: 0, reached: 0 };
+    pub blocked: u32,
 }
 
 /// A built grid: the header, per cell (first entry, entry count), and the entries.

@@ -1,7 +1,12 @@
 //! The light tables behind Monte Carlo light sampling (shaders-glsl/common/light_sampling.glsl):
 //! the emissive triangles, one CDF over every light by power, and the environment's texels and
 //! CDFs, bound in set 0 at bindings 12..16; and the light grid over the resampled lights
-//! (`light_grid`), at bindings 19 and 20.
+//! (`light_grid`), at bindings 19 to 21.
+//!
+//! The light grid lives in device-local memory: gi reads its entries for every candidate and
+//! counts into its visibility with atomics, and light_grid_update rewrites the entries' CDFs,
+//! every frame. A rebuild (the punctual lights changed) is staged in host-visible memory and
+//! copied in by `record`, with the frame's commands.
 //!
 //! Emissive triangles are stored in world space, rebuilt on the CPU when an emissive instance
 //! moves. The alternative, storing (instance, triangle) and transforming in the shader, would
@@ -19,7 +24,9 @@
 use super::environment::{EnvironmentData, luminance};
 use super::light_grid::{self, GpuLightGridEntry, GpuLightGridHeader, GpuLightGridVisibility, LightGrid};
 use super::scene_gpu::{GpuLight, binding};
-use crate::gpu::{self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, vk};
+use crate::gpu::{
+    self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, Recorder, vk,
+};
 use crate::scene::{LightKind, Pose, Scene};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -96,13 +103,19 @@ pub struct LightTables {
     env_texels: Buffer,
     env_cdf: Buffer,
     /// The light grid's header and cells, and its entries (at most `grid_capacity`); rebuilt
-    /// when the punctual lights change.
+    /// when the punctual lights change. Device-local.
     grid: Buffer,
     grid_entries: Buffer,
     /// Per cell and light group, the visibility the hybrid frame learns
     /// (src/passes/light_grid_update.rs); reset when a rebuild moves the grid's cells.
+    /// Device-local.
     grid_visibility: Buffer,
     grid_capacity: usize,
+    /// A rebuilt grid waiting for `record`: its header and cells, then its entries, and the
+    /// pending copy's (cells bytes, entries bytes); whether the visibility is to be reset.
+    grid_staging: Buffer,
+    grid_pending: Option<(u64, u64)>,
+    visibility_reset_pending: bool,
     /// The header of the grid last written (where its cells are).
     grid_header: GpuLightGridHeader,
     /// The grid built at load to size `grid_entries`, with the lights and bounds it was built
@@ -157,13 +170,9 @@ impl LightTables {
         let radius = scene_radius(scene, pose);
         let punctual_powers: Vec<f32> = scene.lights.iter().map(|l| punctual_power(l, radius)).collect();
         let grid_cells = (light_grid::RESOLUTION as usize).pow(3);
-        let grid = Buffer::new(
-            ctx,
-            "lights.grid",
-            (size_of::<GpuLightGridHeader>() + grid_cells * size_of::<[u32; 2]>()) as u64,
-            storage,
-            MemoryLocation::CpuToGpu,
-        )?;
+        let device_storage = storage | vk::BufferUsageFlags::TRANSFER_DST;
+        let grid_bytes = size_of::<GpuLightGridHeader>() + grid_cells * size_of::<[u32; 2]>();
+        let grid = Buffer::new(ctx, "lights.grid", grid_bytes as u64, device_storage, MemoryLocation::GpuOnly)?;
         // Room for the grid of the lights as they are now, twice over, so that lights that move
         // rarely need a coarser grid, up to MAX_ENTRIES; and at least for every resampled light
         // once (one cell).
@@ -182,11 +191,14 @@ impl LightTables {
         });
         let at_load_entries = grid_at_load.as_ref().map_or(0, |(_, _, grid)| grid.entries.len());
         let grid_capacity = (2 * at_load_entries).min(light_grid::MAX_ENTRIES).max(scene.lights.len()).max(1);
-        let grid_entries = Buffer::new(
+        let entries_bytes = grid_capacity * size_of::<GpuLightGridEntry>();
+        let grid_entries =
+            Buffer::new(ctx, "lights.grid_entries", entries_bytes as u64, device_storage, MemoryLocation::GpuOnly)?;
+        let grid_staging = Buffer::new(
             ctx,
-            "lights.grid_entries",
-            (grid_capacity * size_of::<GpuLightGridEntry>()) as u64,
-            storage,
+            "lights.grid (staging)",
+            (grid_bytes + entries_bytes) as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
         let visibility_count =
@@ -195,8 +207,8 @@ impl LightTables {
             ctx,
             "lights.grid_visibility",
             (visibility_count * size_of::<GpuLightGridVisibility>()) as u64,
-            storage,
-            MemoryLocation::CpuToGpu,
+            device_storage,
+            MemoryLocation::GpuOnly,
         )?;
         let mut tables = Self {
             table,
@@ -208,6 +220,10 @@ impl LightTables {
             grid_entries,
             grid_visibility,
             grid_capacity,
+            grid_staging,
+            grid_pending: None,
+            // The device-local buffer starts undefined.
+            visibility_reset_pending: true,
             grid_header: GpuLightGridHeader::default(),
             grid_at_load,
             grid_enabled,
@@ -239,10 +255,11 @@ impl LightTables {
     }
 
     /// Rebuilds the light grid for the punctual lights as written this frame, over the scene's
-    /// bounds at this pose; at a coarser resolution when the finest would not fit.
+    /// bounds at this pose; at a coarser resolution when the finest would not fit. Staged:
+    /// `record` copies it in.
     pub fn update_grid(&mut self, lights: &[GpuLight], bounds: (Vec3, Vec3)) -> Result<()> {
         if !self.grid_enabled {
-            return self.grid.write(0, bytemuck::bytes_of(&GpuLightGridHeader::default()));
+            return self.stage_grid(&GpuLightGridHeader::default(), &[], &[]);
         }
         let grid = match self.grid_at_load.take() {
             // It fits: the capacity is at least its size.
@@ -275,14 +292,48 @@ impl LightTables {
         // belonged to the old cells. An animated light rebuilds the grid every frame, and would
         // never learn anything if each rebuild forgot.
         if bytemuck::bytes_of(&grid.header) != bytemuck::bytes_of(&self.grid_header) {
-            let keys = (grid.header.cell_count * grid.header.group_count) as usize;
-            self.grid_visibility.write(0, bytemuck::cast_slice(&vec![GpuLightGridVisibility::UNKNOWN; keys]))?;
+            self.visibility_reset_pending = true;
         }
-        self.grid_header = grid.header;
-        self.grid.write(0, bytemuck::bytes_of(&grid.header))?;
-        self.grid.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(&grid.cells))?;
-        self.grid_entries.write(0, bytemuck::cast_slice(&grid.entries))?;
+        self.stage_grid(&grid.header, &grid.cells, &grid.entries)
+    }
+
+    /// Writes a grid into the staging buffer for the next `record`.
+    fn stage_grid(
+        &mut self,
+        header: &GpuLightGridHeader,
+        cells: &[[u32; 2]],
+        entries: &[GpuLightGridEntry],
+    ) -> Result<()> {
+        let cells_bytes = size_of::<GpuLightGridHeader>() + size_of_val(cells);
+        self.grid_staging.write(0, bytemuck::bytes_of(header))?;
+        self.grid_staging.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(cells))?;
+        self.grid_staging.write(cells_bytes, bytemuck::cast_slice(entries))?;
+        self.grid_header = *header;
+        self.grid_pending = Some((cells_bytes as u64, size_of_val(entries) as u64));
         Ok(())
+    }
+
+    /// Records the copy of a staged grid into the device-local buffers, and the reset of the
+    /// learned visibility where the grid's cells moved, between barriers against the shaders
+    /// that read and write them. Nothing is recorded when nothing is pending.
+    pub fn record(&mut self, rec: &Recorder) {
+        let Some((cells_bytes, entries_bytes)) = self.grid_pending.take() else {
+            return;
+        };
+        let shaders = (
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        );
+        let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+        rec.memory_barrier(shaders, transfer);
+        rec.copy_buffer_regions(&self.grid_staging, &self.grid, &[(0, 0, cells_bytes)]);
+        if entries_bytes > 0 {
+            rec.copy_buffer_regions(&self.grid_staging, &self.grid_entries, &[(cells_bytes, 0, entries_bytes)]);
+        }
+        if std::mem::take(&mut self.visibility_reset_pending) {
+            rec.zero_buffer(&self.grid_visibility);
+        }
+        rec.memory_barrier(transfer, shaders);
     }
 
     /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build;

@@ -388,10 +388,11 @@ impl SceneGpu {
         Ok(())
     }
 
-    /// Records what makes the GPU geometry current before the frame's passes: deformed
-    /// vertices copied into the vertex buffer, then the ray backend's structures refit or
-    /// rebuilt over them.
+    /// Records what makes the GPU scene current before the frame's passes: a rebuilt light grid
+    /// copied in, deformed vertices copied into the vertex buffer, then the ray backend's
+    /// structures refit or rebuilt over them.
     pub fn record_update(&mut self, rec: &Recorder) -> Result<()> {
+        self.light_tables.record(rec);
         if let Some(deformer) = &mut self.deformer {
             deformer.record(rec, &self.vertices);
         }
