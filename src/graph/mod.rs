@@ -79,6 +79,11 @@ pub enum PassKind {
     Raster,
     /// Copies images.
     Transfer,
+    /// Keeps images for the next frame (passes::history): for each output `history.x` it reads
+    /// `x`, and records nothing. The graph swaps the two images at the start of the next frame
+    /// instead of copying, so `history.x` is then this frame's `x`, and `x` the image its
+    /// writer overwrites.
+    History,
 }
 
 /// What a pass declares about itself.
@@ -161,6 +166,9 @@ pub struct Graph {
     /// Outputs in declaration order (the capture writes them in this order).
     pub output_order: Vec<Resource>,
     sync: HashMap<Resource, SyncState>,
+    /// The images kept for the next frame, (x, history.x), swapped at the start of each frame
+    /// after the first.
+    swaps: Vec<(Resource, Resource)>,
     timestamps: TimestampPool,
     initialised: bool,
     pub extent: vk::Extent2D,
@@ -169,14 +177,26 @@ pub struct Graph {
 impl Graph {
     pub fn new(ctx: &Arc<Context>, passes: Vec<Box<dyn Pass>>, extent: vk::Extent2D) -> Result<Self> {
         let descs: Vec<PassDesc> = passes.iter().map(|p| p.desc()).collect();
-        let mut map = HashMap::new();
+        let mut map: HashMap<Resource, (Image, OutputDesc)> = HashMap::new();
         let mut output_order = Vec::new();
         for d in &descs {
             for o in &d.outputs {
                 if map.contains_key(&o.name) {
                     bail!("frame graph: output {} is written by two passes", o.name);
                 }
-                let usage = match o.usage {
+                // A kept image takes the place of its source every other frame (swap_histories):
+                // it is made like it.
+                let like = match o.name {
+                    Resource::History(source) if d.kind == PassKind::History => match map.get(&source.into()) {
+                        Some((_, s)) if (s.format, s.extent) == (o.format, o.extent) => s.usage,
+                        _ => bail!(
+                            "frame graph: {source} is kept as {}, which no earlier pass writes in its format and size",
+                            o.name
+                        ),
+                    },
+                    _ => o.usage,
+                };
+                let usage = match like {
                     Usage::Storage | Usage::Transfer => vk::ImageUsageFlags::STORAGE,
                     Usage::ColorAttachment => vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE,
                     Usage::DepthAttachment => vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
@@ -204,6 +224,7 @@ impl Graph {
                 map.insert(*i, (image, desc));
             }
         }
+        let swaps = history_swaps(&descs)?;
         let timestamps = TimestampPool::new(ctx, (descs.len() as u32 * 2).max(2))?;
         Ok(Self {
             passes,
@@ -211,6 +232,7 @@ impl Graph {
             images: Images { map },
             output_order,
             sync: HashMap::new(),
+            swaps,
             timestamps,
             initialised: false,
             extent,
@@ -240,6 +262,9 @@ impl Graph {
         frame_index: u32,
         range: std::ops::Range<usize>,
     ) -> Result<()> {
+        if range.start == 0 && self.initialised {
+            self.swap_histories();
+        }
         if !self.initialised {
             // Everything starts at zero: history images are read before their first write.
             for (image, desc) in self.images.map.values() {
@@ -260,15 +285,32 @@ impl Graph {
         let ctx = PassContext { rec, images: &self.images, scene, extent: self.extent, frame_index };
         for (i, pass) in self.passes.iter_mut().enumerate().take(range.end).skip(range.start) {
             let desc = &self.descs[i];
-            let reads: Vec<(Resource, Access)> = desc.inputs.iter().map(|n| (*n, Access::read(desc.kind))).collect();
-            let writes: Vec<(Resource, Access)> =
-                desc.outputs.iter().map(|o| (o.name, Access::write(o.usage))).collect();
-            sync::barrier(rec, &mut self.sync, &reads, &writes);
+            // A history pass touches nothing on the GPU (the swap is bookkeeping).
+            if desc.kind != PassKind::History {
+                let reads: Vec<(Resource, Access)> =
+                    desc.inputs.iter().map(|n| (*n, Access::read(desc.kind))).collect();
+                let writes: Vec<(Resource, Access)> =
+                    desc.outputs.iter().map(|o| (o.name, Access::write(o.usage))).collect();
+                sync::barrier(rec, &mut self.sync, &reads, &writes);
+            }
             rec.timestamp(&self.timestamps, 2 * i as u32);
             pass.record(&ctx)?;
             rec.timestamp(&self.timestamps, 2 * i as u32 + 1);
         }
         Ok(())
+    }
+
+    /// Last frame's images become the history, and the history's images the ones this frame
+    /// writes; each image's barrier state goes with it.
+    fn swap_histories(&mut self) {
+        for (x, history) in &self.swaps {
+            let [a, b] = self.images.map.get_disjoint_mut([x, history]);
+            let (Some(a), Some(b)) = (a, b) else { continue };
+            std::mem::swap(&mut a.0, &mut b.0);
+            let (sx, sh) = (self.sync.remove(x).unwrap_or_default(), self.sync.remove(history).unwrap_or_default());
+            self.sync.insert(*x, sh);
+            self.sync.insert(*history, sx);
+        }
     }
 
     /// Makes `names` readable by a transfer (for capture and read-back) after the frame.
@@ -317,6 +359,37 @@ impl Graph {
 }
 
 /// An image that is zero everywhere and written by no pass (see [`Resource::Zero`]).
+/// The (x, history.x) pairs that history passes keep. Swapping images is a copy only where
+/// every pass that reads `x` runs after the one that writes it (one that read it before would
+/// see the frame before last), so the graph checks that.
+fn history_swaps(descs: &[PassDesc]) -> Result<Vec<(Resource, Resource)>> {
+    let mut swaps = Vec::new();
+    for d in descs.iter().filter(|d| d.kind == PassKind::History) {
+        for o in &d.outputs {
+            let Resource::History(source) = o.name else {
+                bail!("frame graph: history pass {} writes {}, not a history image", d.name, o.name);
+            };
+            let x: Resource = source.into();
+            if !d.inputs.contains(&x) {
+                bail!("frame graph: history pass {} keeps {x} without reading it", d.name);
+            }
+            let writer = descs.iter().position(|w| w.outputs.iter().any(|wo| wo.name == x));
+            let first_reader = descs.iter().position(|r| r.kind != PassKind::History && r.inputs.contains(&x));
+            if let (Some(w), Some(r)) = (writer, first_reader)
+                && r < w
+            {
+                bail!(
+                    "frame graph: {} reads {x} before {} writes it, so it cannot be kept by a swap",
+                    descs[r].name,
+                    descs[w].name
+                );
+            }
+            swaps.push((x, o.name));
+        }
+    }
+    Ok(swaps)
+}
+
 pub fn zero(format: vk::Format, small: bool) -> Resource {
     Resource::Zero { format, small }
 }
@@ -334,4 +407,38 @@ pub fn copy_to_host(ctx: &Arc<Context>, rec: &Recorder, image: &Image) -> Result
     let buffer = gpu::upload::readback_buffer(ctx, image)?;
     rec.copy_image_to_buffer(image, &buffer);
     Ok(buffer)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const X: Output = Output::new("a", "x");
+
+    fn pass(name: &str, kind: PassKind, inputs: Vec<Resource>, outputs: Vec<OutputDesc>) -> PassDesc {
+        PassDesc { name: name.into(), kind, inputs, outputs }
+    }
+
+    fn keep_x() -> PassDesc {
+        let mut kept = OutputDesc::storage(X, vk::Format::R32_SFLOAT, Preview::Scalar);
+        kept.name = Resource::History(X);
+        kept.usage = Usage::Transfer;
+        pass("history", PassKind::History, vec![X.into()], vec![kept])
+    }
+
+    #[test]
+    fn a_kept_image_is_swapped_only_when_read_after_its_writer() {
+        let write_x = pass(
+            "a",
+            PassKind::Compute,
+            Vec::new(),
+            vec![OutputDesc::storage(X, vk::Format::R32_SFLOAT, Preview::Scalar)],
+        );
+        let read_both = pass("b", PassKind::Compute, vec![X.into(), Resource::History(X)], Vec::new());
+        let swaps = history_swaps(&[write_x.clone(), read_both.clone(), keep_x()]).unwrap();
+        assert_eq!(swaps, vec![(X.into(), Resource::History(X))]);
+        // Read before it is written, `x` would hold the frame before last after a swap.
+        let err = history_swaps(&[read_both, write_x, keep_x()]).unwrap_err();
+        assert!(err.to_string().contains("b reads a.x before a writes it"), "{err}");
+    }
 }

@@ -25,7 +25,8 @@ impl Access {
             PassKind::Raster => {
                 Self { stage: Stage::FRAGMENT_SHADER, access: Acc::SHADER_STORAGE_READ | Acc::SHADER_SAMPLED_READ }
             }
-            PassKind::Transfer => Self::transfer_read(),
+            // (A history pass reads nothing on the GPU; the graph places no barrier for it.)
+            PassKind::Transfer | PassKind::History => Self::transfer_read(),
         }
     }
 

@@ -1,6 +1,11 @@
-//! history: copies this frame's images that the next frame needs (the G-buffer's depth,
-//! normals and ids for reprojection tests; the denoisers' feedback) into `history.*` twins.
-//! It runs last, so a pass that reads `history.x` sees the previous frame's `x`.
+//! history: keeps this frame's images that the next frame needs (the G-buffer's depth,
+//! normals and ids for reprojection tests; the denoisers' feedback) as `history.*` twins. It
+//! copies nothing: each `x` and its `history.x` are two images that the graph swaps at the
+//! start of the next frame (graph::PassKind::History), so a pass that reads `history.x` sees
+//! the previous frame's `x`, and `x`'s writer overwrites the image of the frame before. That
+//! needs every kept `x` written whole, every frame, before anything reads it (the graph checks
+//! the order; each writer here stores every pixel). The copies cost 8 ms of a 420 ms frame at
+//! 640x360 on lavapipe, and on a GPU a read and a write of 16 full-screen images.
 
 use super::gbuffer;
 use crate::gpu::vk;
@@ -56,7 +61,7 @@ impl Pass for HistoryPass {
     fn desc(&self) -> PassDesc {
         PassDesc {
             name: NAME.into(),
-            kind: PassKind::Transfer,
+            kind: PassKind::History,
             inputs: self.kept.iter().map(|k| k.source.into()).collect(),
             outputs: self
                 .kept
@@ -72,10 +77,7 @@ impl Pass for HistoryPass {
         }
     }
 
-    fn record(&mut self, ctx: &PassContext) -> Result<()> {
-        for k in &self.kept {
-            ctx.rec.copy_image(ctx.images.get(k.source), ctx.images.get(of(k.source)));
-        }
+    fn record(&mut self, _: &PassContext) -> Result<()> {
         Ok(())
     }
 }
