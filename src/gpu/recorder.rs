@@ -225,29 +225,6 @@ impl<'a> Recorder<'a> {
         };
     }
 
-    /// Copies a whole image into another of the same size and format (both in GENERAL).
-    pub fn copy_image(&self, src: &Image, dst: &Image) {
-        let layers =
-            vk::ImageSubresourceLayers { aspect_mask: src.aspect, mip_level: 0, base_array_layer: 0, layer_count: 1 };
-        let region = vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(vk::Extent3D {
-            width: src.extent.width,
-            height: src.extent.height,
-            depth: 1,
-        });
-        // SAFETY: recording; both images borrowed (live) and in GENERAL; callers copy between
-        // images of one size and format (history copies of a pass's own outputs).
-        unsafe {
-            self.ctx.device.cmd_copy_image(
-                self.cmd,
-                src.raw,
-                vk::ImageLayout::GENERAL,
-                dst.raw,
-                vk::ImageLayout::GENERAL,
-                &[region],
-            )
-        };
-    }
-
     pub fn copy_buffer(&self, src: &Buffer, dst: &Buffer, size: u64) {
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size };
         // SAFETY: recording; both buffers borrowed (live); callers pass a size within both.
