@@ -136,8 +136,9 @@ bool load_finite(int s, ivec2 q, out vec3 c) {
 // from the tile, where each tap had loaded its own texels (72 loads a pixel for the 5x5
 // window). On lavapipe at 640x360 the pass went from 62-69 to 56-60 ms in one pair of runs,
 // 48 to 45-46 in a later one; the tile alone, with the luminance computed per tap, saved
-// nothing: the walk is bound by its arithmetic as much as by its loads. Texels past the image's edge hold the edge's (the clamp's walk wants that;
-// the young history's walk skips them).
+// nothing: the walk is bound by its arithmetic as much as by its loads. Texels past the
+// image's edge hold the edge's (the clamp's walk wants that; the young history's walk skips
+// them).
 #define WINDOW_RADIUS 3
 #define TILE_SIDE (8 + 2 * WINDOW_RADIUS)
 shared vec4 tile_guide[TILE_SIDE * TILE_SIDE];

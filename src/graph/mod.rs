@@ -358,7 +358,6 @@ impl Graph {
     }
 }
 
-/// An image that is zero everywhere and written by no pass (see [`Resource::Zero`]).
 /// The (x, history.x) pairs that history passes keep. Swapping images is a copy only where
 /// every pass that reads `x` runs after the one that writes it (one that read it before would
 /// see the frame before last), so the graph checks that.
@@ -390,6 +389,7 @@ fn history_swaps(descs: &[PassDesc]) -> Result<Vec<(Resource, Resource)>> {
     Ok(swaps)
 }
 
+/// An image that is zero everywhere and written by no pass (see [`Resource::Zero`]).
 pub fn zero(format: vk::Format, small: bool) -> Resource {
     Resource::Zero { format, small }
 }
