@@ -12,11 +12,16 @@
 //   by (frame mod 4, the pixel's place in its 3x3 block, sample), like the chapter's Poisson
 //   sets.
 // - Lights out of range at a pixel (range window 0) are culled: visibility 0, no rays.
-// Writes the 4-frame visibility ring (ring0 = this frame), sample counts and stability counters.
+// - Tinted glass: the visibility is grey (the mean of the channels that pass), and the colour
+//   goes beside it in `tint` (common/shadow_tint.glsl), carried with the visibility it belongs
+//   to: a soft light's reused visibility keeps the tint of the frame that traced it.
+// Writes the 4-frame visibility ring (ring0 = this frame), sample counts, stability counters
+// and the tint.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/gbuffer.glsl"
 #include "common/light_sampling.glsl"
+#include "common/shadow_tint.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -32,12 +37,14 @@ layout(set = 1, binding = 8, rgba16f) uniform readonly image2D prev_sample_count
 layout(set = 1, binding = 9, rgba16f) uniform readonly image2D prev_stable;
 layout(set = 1, binding = 10, rgba16f) uniform readonly image2D prev_dv;      // last frame's filtered variation
 layout(set = 1, binding = 11, r32ui) uniform readonly uimage2D prev_budget;   // last frame's summed variation x 64
-layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_ring0;
-layout(set = 1, binding = 13, rgba16f) uniform writeonly image2D out_ring1;
-layout(set = 1, binding = 14, rgba16f) uniform writeonly image2D out_ring2;
-layout(set = 1, binding = 15, rgba16f) uniform writeonly image2D out_ring3;
-layout(set = 1, binding = 16, rgba16f) uniform writeonly image2D out_sample_count;   // sample count per light (0: culled)
-layout(set = 1, binding = 17, rgba16f) uniform writeonly image2D out_stable;  // frames the count has not changed
+layout(set = 1, binding = 12, rgba32ui) uniform readonly uimage2D prev_tint;
+layout(set = 1, binding = 13, rgba16f) uniform writeonly image2D out_ring0;
+layout(set = 1, binding = 14, rgba16f) uniform writeonly image2D out_ring1;
+layout(set = 1, binding = 15, rgba16f) uniform writeonly image2D out_ring2;
+layout(set = 1, binding = 16, rgba16f) uniform writeonly image2D out_ring3;
+layout(set = 1, binding = 17, rgba16f) uniform writeonly image2D out_sample_count;   // sample count per light (0: culled)
+layout(set = 1, binding = 18, rgba16f) uniform writeonly image2D out_stable;  // frames the count has not changed
+layout(set = 1, binding = 19, rgba32ui) uniform writeonly uimage2D out_tint;   // common/shadow_tint.glsl
 
 #include "common/shadows_common.glsl"
 
@@ -48,24 +55,30 @@ const uint FORCED[16] = uint[16](0u, 3u, 2u, 1u, 2u, 1u, 0u, 3u, 0u, 3u, 2u, 1u,
 // Low-discrepancy point n of the R2 sequence (Roberts 2018).
 vec2 r2(uint n) { return fract(vec2(0.5) + float(n) * vec2(0.7548776662, 0.5698402910)); }
 
-// Fraction of the shadow rays toward `count` points of light i that reach it, a ray through
-// see-through surfaces counting with the mean of what passes them (the signal is grey: tinted
-// glass casts a grey shadow of the same strength). Points that send
-// no light here (the back of a disk, outside a spot's cone) say nothing about occlusion and are
-// left out; with none left the light is unoccluded by definition (it sends nothing anyway).
-float trace_visibility(uint i, vec3 origin, ivec2 px, uint count) {
+// Fraction of the shadow rays toward `count` points of light i that reach it, per channel: a ray
+// through see-through surfaces counts with what passes them. Points that send no light here
+// (the back of a disk, outside a spot's cone) say nothing about occlusion and are left out;
+// with none left the light is unoccluded by definition (it sends nothing anyway).
+vec3 trace_visibility(uint i, vec3 origin, ivec2 px, uint count) {
     uint set = ((frame.frame_index & 3u) * 9u + uint(px.y % 3) * 3u + uint(px.x % 3)) * count;
-    float visible = 0.0, tried = 0.0;
+    vec3 visible = vec3(0.0);
+    float tried = 0.0;
     for (uint k = 0u; k < count; ++k) {
         // Sampled from the ray's origin, so direction and length are the ray's own.
         NeeSample s = sample_punctual_light(i, origin, r2(set + k), 1.0);
         if (dot(s.weight, s.weight) == 0.0) continue;
         tried += 1.0;
         float tmax = s.dist >= LIGHT_FAR ? 1e30 : s.dist * (1.0 - 1e-4);
-        vec3 through = trace_transmittance(origin, s.dir, 0.0, tmax, RAY_MASK_ALL);
-        visible += (through.r + through.g + through.b) / 3.0;
+        visible += trace_transmittance(origin, s.dir, 0.0, tmax, RAY_MASK_ALL);
     }
-    return tried > 0.0 ? visible / tried : 1.0;
+    return tried > 0.0 ? visible / tried : vec3(1.0);
+}
+
+float grey(vec3 c) { return (c.r + c.g + c.b) / 3.0; }
+
+// Without tinted glass the tint is a 1x1 zero: written once, read by nobody.
+void store_tint(ivec2 px, uvec4 tint) {
+    if (sp.tinted != 0u || px == ivec2(0)) imageStore(out_tint, px, sp.tinted != 0u ? tint : uvec4(0u));
 }
 
 void main() {
@@ -79,6 +92,7 @@ void main() {
         imageStore(out_ring3, px, one);
         imageStore(out_sample_count, px, vec4(0.0));
         imageStore(out_stable, px, vec4(0.0));
+        store_tint(px, uvec4(0u));
         return;
     }
     float depth = imageLoad(g_depth, px).r;
@@ -106,6 +120,7 @@ void main() {
     bool forced = sp.forced_blocks != 0u && FORCED[(block.y & 3) * 4 + (block.x & 3)] == (frame.frame_index & 3u);
 
     vec4 vis = vec4(1.0);
+    uvec4 tint = uvec4(0u);
     vec4 state = vec4(0.0);
     bvec4 soft = soft_lights();
     for (uint i = 0u; i < min(frame.light_count, 4u); ++i) {
@@ -116,7 +131,9 @@ void main() {
             continue;
         }
         if (!soft[i]) {
-            vis[i] = trace_visibility(i, origin, px, 1u);
+            vec3 through = trace_visibility(i, origin, px, 1u);
+            vis[i] = grey(through);
+            tint[i] = shadow_tint_encode(through);
             state[i] = 1.0;
             continue;
         }
@@ -138,9 +155,12 @@ void main() {
         state[i] = s;
         bool sample_now = !reprojected || dv[i] > sp.delta || forced;
         if (sample_now) {
-            vis[i] = trace_visibility(i, origin, px, uint(s));
+            vec3 through = trace_visibility(i, origin, px, uint(s));
+            vis[i] = grey(through);
+            tint[i] = shadow_tint_encode(through);
         } else {
             vis[i] = r0[i];
+            if (sp.tinted != 0u) tint[i] = imageLoad(prev_tint, q)[i];
         }
         if (!reprojected) {
             // Nothing cached is valid: every slot of the ring takes the new estimate.
@@ -163,4 +183,5 @@ void main() {
     imageStore(out_ring3, px, r2v);
     imageStore(out_sample_count, px, state);
     imageStore(out_stable, px, stable);
+    store_tint(px, tint);
 }

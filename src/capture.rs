@@ -150,6 +150,10 @@ pub fn preview(img: &CpuImage, kind: Preview) -> Vec<u8> {
             Preview::Motion => {
                 [to8(0.5 + 0.5 * ch(i, 0) / motion_scale), to8(0.5 + 0.5 * ch(i, 1) / motion_scale), 128, 255]
             }
+            Preview::Tint => match img.get_u32((i % img.width as usize) as u32, (i / img.width as usize) as u32, 0) {
+                0 => [255; 4],
+                packed => [packed as u8, (packed >> 8) as u8, (packed >> 16) as u8, 255],
+            },
             Preview::Scalar => {
                 let v = if hi > lo { (ch(i, 0) - lo) / (hi - lo) } else { 0.0 };
                 [to8(v), to8(v), to8(v), 255]

@@ -17,6 +17,7 @@ layout(push_constant) uniform ShadowParams {
     float budget;        // the image's summed variation above which s_max is lowered
     uint forced_blocks;  // 1: 8x8 blocks rotating over 4 frames are always sampled
     uint tent_axis;      // shadows_tent: 0 horizontal, 1 vertical
+    uint tinted;         // shadows: 1 when some thin glass is tinted (shadows.tint is written)
 } sp;
 
 // Which of the first four lights are soft (have a radius): a bool per channel.

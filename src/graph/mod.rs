@@ -34,6 +34,9 @@ pub enum Preview {
     Motion,
     /// A scalar: min..max mapped to black..white.
     Scalar,
+    /// Packed RGBA8 colours, one per channel (`shadows.tint`): the first channel's shown, 0
+    /// (no tint) as white.
+    Tint,
 }
 
 /// How a pass writes an output.

@@ -36,7 +36,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         passes.push(Box::new(passes::primary_rays::new(b)?));
     }
     let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
-    let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows)?;
+    let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows, plan.tinted_shadows)?;
     passes.extend(shadows.passes);
     kept.extend(shadows.kept);
     // gi's shadow rays toward the resampled lights teach the light grid what its cells see; the
@@ -104,7 +104,13 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         kept.extend(chain.kept);
         injected.insert(TEST_INPUT, texels);
     }
-    passes.push(Box::new(passes::composite::new(b, shadows.visibility.into(), diffuse, specular)?));
+    passes.push(Box::new(passes::composite::new(
+        b,
+        shadows.visibility.into(),
+        plan.tinted_shadows,
+        diffuse,
+        specular,
+    )?));
     let mut hdr_output = passes::composite::COLOR;
     if settings.taa {
         passes.push(Box::new(passes::taa::new(b, hdr_output.into(), plan.reflections)?));

@@ -30,6 +30,9 @@ pub const RIS_CANDIDATES: u32 = 8;
 pub struct FramePlan {
     pub reflections: bool,
     pub soft_shadows: bool,
+    /// Some thin glass is tinted: the shadows chain keeps the colour of what it lets through
+    /// (`shadows.tint`, 1x1 and unwritten otherwise).
+    pub tinted_shadows: bool,
     pub gi: bool,
     /// Indices into the scene's lights that cannot reach any geometry.
     pub culled_lights: Vec<usize>,
@@ -52,6 +55,7 @@ impl FramePlan {
         Self {
             reflections: true,
             soft_shadows: true,
+            tinted_shadows: true,
             gi: true,
             culled_lights: Vec::new(),
             resampled_lights: light_order.len().saturating_sub(MAX_SHADOWED_LIGHTS),
@@ -100,6 +104,15 @@ impl FramePlan {
         } else {
             "shadows: every light is punctual: one hard-shadow ray per light, no penumbra detection or filter".into()
         });
+        let tinted = tinted_glass(scene);
+        let tinted_shadows = !tinted.is_empty();
+        if tinted_shadows {
+            reasons.push(format!(
+                "shadows: light through tinted thin glass keeps its colour (shadows.tint), {} material(s): {}",
+                tinted.len(),
+                list(&tinted)
+            ));
+        }
 
         if scene.is_animated() {
             reasons.push("lights: none culled, the scene is animated".into());
@@ -159,6 +172,7 @@ impl FramePlan {
         Self {
             reflections,
             soft_shadows,
+            tinted_shadows,
             gi,
             culled_lights,
             light_order,
@@ -173,6 +187,27 @@ fn scene_diagonal(scene: &Scene) -> f32 {
     let (lo, hi) = scene.bounds(&scene.evaluate(0.0));
     let d = (hi - lo).length();
     if d.is_finite() { d } else { 1.0 }
+}
+
+/// Thin glass (transmissive without a volume, which shadow rays cross) whose base colour is not
+/// grey, by factor or texture: what passes it is coloured. Blended surfaces let 1 - alpha
+/// through, grey.
+fn tinted_glass(scene: &Scene) -> Vec<&str> {
+    let grey = |c: [f32; 3]| c[0] == c[1] && c[1] == c[2];
+    let texture_grey = |t: TextureRef| {
+        let image =
+            scene.textures.get(t.texture as usize).and_then(|t| t.image).and_then(|i| scene.images.get(i as usize));
+        image.is_none_or(|img| img.rgba8.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2]))
+    };
+    scene
+        .materials
+        .iter()
+        .filter(|m| m.is_transmissive() && m.thickness <= 0.0)
+        .filter(|m| {
+            !grey(m.base_color_factor.truncate().to_array()) || m.base_color_texture.is_some_and(|t| !texture_grey(t))
+        })
+        .map(|m| m.name.as_str())
+        .collect()
 }
 
 fn list(names: &[&str]) -> String {
@@ -248,6 +283,34 @@ mod tests {
         assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
         let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true);
         assert!(p.soft_shadows);
+    }
+
+    #[test]
+    fn only_tinted_thin_glass_makes_the_shadows_keep_a_colour() {
+        let tinted_with = |m: crate::scene::Material| {
+            let mut s = builtin::shadow_test();
+            s.materials[0] = m;
+            FramePlan::for_scene(&s, 0.6, true).tinted_shadows
+        };
+        let glass = |rgb: Vec3| crate::scene::Material {
+            name: "glass".into(),
+            base_color_factor: rgb.extend(1.0),
+            transmission: 1.0,
+            ..Default::default()
+        };
+        assert!(tinted_with(glass(Vec3::new(1.0, 0.5, 0.25))));
+        assert!(!tinted_with(glass(Vec3::splat(0.8))), "grey glass");
+        assert!(
+            !tinted_with(crate::scene::Material { thickness: 0.1, ..glass(Vec3::new(1.0, 0.5, 0.25)) }),
+            "a volume"
+        );
+        let blend = crate::scene::Material {
+            base_color_factor: glam::Vec4::new(1.0, 0.0, 0.0, 0.5),
+            alpha_mode: crate::scene::AlphaMode::Blend,
+            ..Default::default()
+        };
+        assert!(!tinted_with(blend), "blended surfaces let 1 - alpha through, grey");
+        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true).tinted_shadows);
     }
 
     #[test]

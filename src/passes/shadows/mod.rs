@@ -7,7 +7,8 @@
 //!
 //! Lights with a radius (sphere lights for points, disk lights for spots) are soft: adaptive
 //! sample counts 1..s_max, filtering, history. Lights without one are hard: one ray, no filter.
-//! The final visibility is `shadows_filter.visibility`, one channel per light.
+//! The final visibility is `shadows_filter.visibility`, one channel per light, grey; the colour
+//! of tinted glass on the way goes beside it, unfiltered, in `shadows.tint`.
 
 pub mod filter;
 pub mod penumbra;
@@ -26,6 +27,8 @@ use bytemuck::{Pod, Zeroable};
 pub const VISIBILITY: Output = filter::VISIBILITY;
 /// The visibility of a chain without soft lights (see [`Chain::visibility`]).
 pub const HARD_VISIBILITY: Output = trace::RING0;
+/// The colour beside the visibility (see [`trace::TINT`]).
+pub const TINT: Output = trace::TINT;
 /// The first this many lights (the brightest: `world::lights::shading_order`) get the chain's
 /// visibility; the rest are resampled in gi.
 pub const MAX_SHADOWED_LIGHTS: usize = crate::world::lights::SHADOWED_LIGHTS;
@@ -65,10 +68,12 @@ pub struct Params {
     pub budget: f32,
     pub forced_blocks: u32,
     pub tent_axis: u32,
+    /// 1: some thin glass is tinted and the trace pass writes `shadows.tint` (the frame plan).
+    pub tinted: u32,
 }
 
 impl ShadowSettings {
-    fn push_constants(&self, pixels: u32, tent_axis: u32) -> Params {
+    fn push_constants(&self, pixels: u32, tent_axis: u32, tinted: bool) -> Params {
         Params {
             s_max: self.s_max.max(1),
             delta: self.delta,
@@ -76,6 +81,7 @@ impl ShadowSettings {
             budget: self.budget_fraction * pixels as f32,
             forced_blocks: self.forced_blocks as u32,
             tent_axis,
+            tinted: tinted as u32,
         }
     }
 }
@@ -92,21 +98,23 @@ pub struct Chain {
 }
 
 /// The chain's passes. With `soft` false (every light punctual, the frame plan's call) only the
-/// trace pass runs: one hard-shadow ray per light, nothing kept, nothing filtered.
-pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bool) -> Result<Chain> {
+/// trace pass runs: one hard-shadow ray per light, nothing kept, nothing filtered. With `tinted`
+/// false (no tinted thin glass, the plan's call) `shadows.tint` is 1x1 and holds no tint.
+pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bool, tinted: bool) -> Result<Chain> {
     let pixels = extent.width * extent.height;
+    let push = |axis| s.push_constants(pixels, axis, tinted);
     if !soft {
-        let trace = trace::new(b, &s.push_constants(pixels, 0), false)?;
+        let trace = trace::new(b, &push(0), false, tinted)?;
         return Ok(Chain { passes: vec![Box::new(trace)], kept: Vec::new(), visibility: HARD_VISIBILITY });
     }
     let passes: Vec<Box<dyn Pass>> = vec![
-        Box::new(trace::new(b, &s.push_constants(pixels, 0), true)?),
+        Box::new(trace::new(b, &push(0), true, tinted)?),
         Box::new(penumbra::new(b)?),
-        Box::new(tent::new(b, 0, &s.push_constants(pixels, 0))?),
-        Box::new(tent::new(b, 1, &s.push_constants(pixels, 1))?),
-        Box::new(filter::new(b, &s.push_constants(pixels, 0))?),
+        Box::new(tent::new(b, 0, &push(0))?),
+        Box::new(tent::new(b, 1, &push(1))?),
+        Box::new(filter::new(b, &push(0))?),
     ];
-    let kept = vec![
+    let mut kept = vec![
         Kept::new(trace::RING0, RING, Preview::Color),
         Kept::new(trace::RING1, RING, Preview::Color),
         Kept::new(trace::RING2, RING, Preview::Color),
@@ -115,5 +123,8 @@ pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bo
         Kept::new(filter::DV, RING, Preview::Scalar),
         Kept::new(filter::BUDGET, vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1),
     ];
+    if tinted {
+        kept.push(Kept::new(trace::TINT, trace::TINT_FORMAT, Preview::Tint));
+    }
     Ok(Chain { passes, kept, visibility: VISIBILITY })
 }
