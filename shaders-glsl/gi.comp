@@ -21,12 +21,13 @@
 //   diffuse lobe goes into the diffuse signal and its specular lobe into gi.specular on every
 //   surface (the reflections pass adds it under the cut-off, where its rays cannot hit a
 //   punctual light). The reservoir goes to gi.reservoir for the next frame;
-// - indirect light: at the bounce ray's hit, next-event estimation toward a light chosen by
-//   power (any kind, with a shadow ray), and the light that surface reflects from other
-//   surfaces from the radiance cache (every further bounce); with `bounces` > 1 the path first
-//   continues by BSDF sampling, with a light sample at each vertex, and the cache answers at the
-//   last one. Where the cache cannot answer (a corner, a cell still empty, or the cache off)
-//   the path traces on.
+// - indirect light (the bounce ray goes straight on through see-through surfaces, as the light
+//   sample's shadow ray does: common/pass_through.glsl): at the bounce ray's hit, next-event
+//   estimation toward a light chosen by power (any kind, with a shadow ray), and the light that
+//   surface reflects from other surfaces from the radiance cache (every further bounce); with
+//   `bounces` > 1 the path first continues by BSDF sampling, with a light sample at each
+//   vertex, and the cache answers at the last one. Where the cache cannot answer (a corner, a
+//   cell still empty, or the cache off) the path traces on.
 //
 // At half rate (`params.half_rate`, never with resampled lights, whose reservoirs every pixel
 // must carry) the pixels of a checkerboard that alternates every frame are traced, and each of
@@ -44,6 +45,7 @@
 #include "common/ray_offset.glsl"
 #include "common/light_reservoir.glsl"
 #include "common/gi_fill.glsl"
+#include "common/pass_through.glsl"
 #define RC_BINDING 14
 #include "common/radiance_cache.glsl"
 
@@ -194,12 +196,23 @@ void shade(ivec2 px) {
     if ((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0) {
         vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
-        Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
+        // Straight on through see-through surfaces, as the light sample's shadow ray goes (one
+        // call site in a loop: see above).
+        vec3 through = vec3(1.0);
+        vec3 from = origin;
+        Hit h;
+        HitSurface s;
+        [[dont_unroll]] for (uint crossed = 0u;; ++crossed) {
+            h = trace_closest(from, dir, 0.0, 1e6, RAY_MASK_ALL);
+            if (h.instance == NO_HIT) break;
+            s = hit_surface(h.instance, h.primitive, h.bary, dir);
+            if (crossed == PASS_THROUGH_MAX || !pass_through(s, dir, through, rng)) break;
+            from = offset_ray(s.position, -s.normal_geo);
+        }
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
         if (h.instance == NO_HIT) {
             bounce = env_eval(dir) * mis_power(pdf, light_pdf_environment(dir));
         } else {
-            HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
             if (emitter_visible_side(h.instance, h.primitive, dir)) {
                 float lp = light_pdf_emitter(h.instance, h.primitive, origin, s.position);
                 bounce += s.mat.emissive * mis_power(pdf, lp);
@@ -209,6 +222,7 @@ void shade(ivec2 px) {
             bounce += rc_radiance_leaving(s, dir, h.t, traced - 1u, vertices, true,
                                           rc_copy_written(frame.frame_index), rng);
         }
+        bounce *= through;
         l_sum += lobe * bounce;
         if (rough) spec_sum += bounce * brdf_eval_specular_cos(m, n, v, dir) / pdf;
     }

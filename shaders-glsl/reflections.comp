@@ -18,6 +18,7 @@
 #include "common/ray_offset.glsl"
 #define RC_BINDING 9
 #include "common/radiance_cache.glsl"
+#include "common/pass_through.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -42,11 +43,10 @@ layout(push_constant) uniform Params {
 // Below this roughness the surface is a mirror: one exact reflection, no sampling.
 #define MIRROR_ROUGHNESS 0.01
 
-// Radiance leaving a hit toward -dir: emission, a light sample, and what the surface reflects
-// from other surfaces, from the radiance cache (with the cache off, the path traced on for as
-// many vertices as gi traces).
-vec3 shade_hit(Hit h, vec3 dir, inout Rng rng) {
-    HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
+// Radiance leaving hit h (surface s) toward -dir: emission, a light sample, and what the surface
+// reflects from other surfaces, from the radiance cache (with the cache off, the path traced on
+// for as many vertices as gi traces).
+vec3 shade_hit(Hit h, HitSurface s, vec3 dir, inout Rng rng) {
     vec3 radiance = emitter_visible_side(h.instance, h.primitive, dir) ? s.mat.emissive : vec3(0.0);
     uint vertices = rc.enabled != 0u ? RC_VERTICES : max(params.bounces, 1u);
     return radiance + rc_radiance_leaving(s, dir, h.t, 0u, vertices, true, rc_copy_written(frame.frame_index), rng);
@@ -99,7 +99,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
         // inner side reflects by the interface sample below instead.
         bool inner_side = hm.thickness > 0.0 && !s.front;
         if (through <= 0.0 || !inner_side) {
-            emitted += weight * shade_hit(h, dir, rng);
+            emitted += weight * shade_hit(h, s, dir, rng);
         } else if (emitter_visible_side(h.instance, h.primitive, dir)) {
             emitted += weight * s.mat.emissive;
         }
@@ -135,7 +135,7 @@ vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng) {
         if (h.instance == NO_HIT) return env_eval(dir);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         bool blended = (materials[s.material].flags & MATERIAL_BLEND) != 0u;
-        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) return shade_hit(h, dir, rng);
+        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) return shade_hit(h, s, dir, rng);
         origin = offset_ray(s.position, -s.normal_geo);
     }
     return vec3(0.0);
@@ -204,12 +204,25 @@ void main() {
             weight = fresnel_schlick(f0, dot(v, h)) * g2 / ggx_g1(n_dot_v, alpha);
         }
         if (dot(l, ng) <= 0.0) continue;
-        Hit h = trace_closest(origin, l, 0.0, 1e6, RAY_MASK_ALL);
+        // Straight on through see-through surfaces (a window seen in a mirror shows what lies
+        // behind it); the hit distance runs to where the ray stops. One call site in a loop.
+        vec3 from = origin;
+        float travelled = 0.0;
+        Hit h;
+        HitSurface s;
+        [[dont_unroll]] for (uint crossed = 0u;; ++crossed) {
+            h = trace_closest(from, l, 0.0, 1e6, RAY_MASK_ALL);
+            if (h.instance == NO_HIT) break;
+            travelled += h.t;
+            s = hit_surface(h.instance, h.primitive, h.bary, l);
+            if (crossed == PASS_THROUGH_MAX || !pass_through(s, l, weight, rng)) break;
+            from = offset_ray(s.position, -s.normal_geo);
+        }
         if (h.instance == NO_HIT) {
             sum += weight * env_eval(l);
         } else {
-            sum += weight * shade_hit(h, l, rng);
-            dist_sum += h.t;
+            sum += weight * shade_hit(h, s, l, rng);
+            dist_sum += travelled;
             hits += 1.0;
         }
     }

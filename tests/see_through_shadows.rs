@@ -47,6 +47,8 @@ enum Pane {
 enum Sun {
     Hard,
     Soft,
+    /// No light: a white sky (a constant environment of radiance 1) all around.
+    Sky,
 }
 
 /// A dark 50 x 50 plane facing +Y at the origin, seen straight down from (0, 3, 0) through
@@ -100,6 +102,7 @@ fn scene(pane: Pane, sun: Sun) -> Scene {
     let (kind, intensity, radius) = match sun {
         Sun::Hard => (LightKind::Directional, 3.0, 0.0),
         Sun::Soft => (LightKind::Point, 300.0, 0.5),
+        Sun::Sky => return s,
     };
     s.lights.push(Light {
         name: "sun".into(),
@@ -119,7 +122,7 @@ fn mean_rgb(ctx: &Arc<Context>, pane: Pane, sun: Sun, reference: Option<u32>, fr
     let settings = Settings {
         width: SIZE,
         height: SIZE,
-        environment: Environment::Constant(Vec3::ZERO),
+        environment: Environment::Constant(if sun == Sun::Sky { Vec3::ONE } else { Vec3::ZERO }),
         mode: match reference {
             Some(max_bounces) => RenderMode::Reference { seed: 1, max_bounces },
             None => RenderMode::default(),
@@ -217,5 +220,20 @@ fn tinted_glass_colours_a_soft_light_in_the_hybrid_frame() {
     // 13 frames: the last one reuses what frame 12 traced where its block's turn has not come.
     let hybrid = ratio(mean_rgb(&ctx, pane, Sun::Soft, None, 13), mean_rgb(&ctx, Pane::None, Sun::Soft, None, 13));
     assert_hybrid_matches("smooth glass under a sphere light", hybrid, reference);
+    common::assert_validation_clean(ctx);
+}
+
+/// Under a white sky the plane sees the sky through the pane (it covers 97% of the plane's
+/// cosine-weighted hemisphere): gi's bounce rays must pass smooth thin glass as its light
+/// samples' shadow rays do, or the bounce's share of the sky (multiple importance sampling
+/// splits it between the two) goes missing.
+#[test]
+fn the_sky_through_smooth_thin_glass_lights_the_hybrid_frame() {
+    let ctx = common::validated_context();
+    for pane in [Pane::None, Pane::Glass { roughness: 0.0 }] {
+        let reference = mean_rgb(&ctx, pane, Sun::Sky, Some(8), 64);
+        let hybrid = mean_rgb(&ctx, pane, Sun::Sky, None, 16);
+        assert_hybrid_matches(&format!("{pane:?} under a white sky"), hybrid, reference);
+    }
     common::assert_validation_clean(ctx);
 }

@@ -33,6 +33,7 @@
 
 // A path vertex's light sample is resampled from a few draws (light_sample_resampled).
 #include "light_reservoir.glsl"
+#include "pass_through.glsl"
 
 #ifndef RC_BINDING
 #error "RC_BINDING: define the first set-1 binding of the radiance cache before including it"
@@ -228,7 +229,8 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
     for (uint vertex = 0u; vertex < vertices; ++vertex) {
         // Glass reflects only the light it does not let through: its diffuse lobe shrinks by
         // the transmitted share (exactly so for a dielectric; a transmissive metal's F0 tint
-        // shrinks with it). What it lets through is not followed on these paths.
+        // shrinks with it). What thin glass lets through, the BRDF-sampled ray below follows
+        // (pass_through); a volume's is not followed on these paths.
         vec3 base = s.mat.base_color.rgb * (1.0 - s.mat.transmission);
         BrdfInput m = BrdfInput(base, s.mat.metallic, s.mat.roughness, dielectric_f0(s.mat.ior));
         vec3 v = -dir;
@@ -256,6 +258,11 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
         bool answered = false, traced_next = false;
         Hit next;
         next.instance = NO_HIT;
+        HitSurface next_surface;
+        // The BRDF-sampled ray goes straight on through see-through surfaces (by this site
+        // again: `from` moves behind each), scaled by what passes.
+        vec3 from = leave, passed = vec3(1.0);
+        uint crossed = 0u;
         [[dont_unroll]] for (uint ray = RC_RAY_LIGHT; ray <= RC_RAY_NEXT; ++ray) {
             vec3 o = leave, d = ls.dir;
             float tmax = shadow_ray_tmax(ls.dist);
@@ -268,6 +275,7 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                 tmax = cached.len;
             } else {
                 if (answered || !scatters || vertex + 1u == vertices) break;
+                o = from;
                 d = bs.l;
                 tmax = 1e6;
             }
@@ -288,17 +296,25 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
             } else if (ray == RC_RAY_NEXT) {
                 next = h;
                 traced_next = true;
+                if (h.instance == NO_HIT) continue;
+                next_surface = hit_surface(h.instance, h.primitive, h.bary, d);
+                if (crossed < PASS_THROUGH_MAX && pass_through(next_surface, d, passed, rng)) {
+                    ++crossed;
+                    from = offset_ray(next_surface.position, -next_surface.normal_geo);
+                    --ray;  // the loop's increment brings it back to RC_RAY_NEXT
+                }
             }
         }
+        specular_carry *= passed;
         if (next.instance == NO_HIT) {
             // Only a traced ray escapes: the environment, seen through a specular lobe.
             if (traced_next) radiance += specular_carry * env_eval(bs.l);
             break;
         }
-        throughput *= bs.weight;
+        throughput *= bs.weight * passed;
         dir = bs.l;
         t = next.t;
-        s = hit_surface(next.instance, next.primitive, next.bary, dir);
+        s = next_surface;
         if (emitter_visible_side(next.instance, next.primitive, dir)) radiance += specular_carry * s.mat.emissive;
     }
     return radiance;
