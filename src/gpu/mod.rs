@@ -38,6 +38,7 @@ pub mod shader;
 #[cfg(feature = "shader-compiler")]
 mod shader_compile;
 pub mod shader_sources;
+pub mod staged;
 mod swapchain;
 mod timestamps;
 pub mod upload;

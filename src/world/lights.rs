@@ -25,7 +25,9 @@ use super::environment::{EnvironmentData, luminance};
 use super::light_grid::{self, GpuLightGridEntry, GpuLightGridHeader, GpuLightGridVisibility, LightGrid};
 use super::scene_gpu::{GpuLight, binding};
 use crate::gpu::{
-    self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, Recorder, vk,
+    self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, Recorder,
+    staged::{self, StagedBuffer},
+    vk,
 };
 use crate::scene::{LightKind, Pose, Scene};
 use anyhow::Result;
@@ -97,8 +99,8 @@ pub fn bindings() -> Vec<Binding> {
 
 pub struct LightTables {
     /// Header and CDF entries; rewritten when emitters move.
-    table: Buffer,
-    emitters: Buffer,
+    table: StagedBuffer,
+    emitters: StagedBuffer,
     emitter_base: Buffer,
     env_texels: Buffer,
     env_cdf: Buffer,
@@ -148,19 +150,17 @@ impl LightTables {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let (bases, emitter_count) = emitter_bases(scene);
         let entry_count = scene.lights.len() + emitter_count as usize + 1;
-        let table = Buffer::new(
+        let table = StagedBuffer::new(
             ctx,
             "lights.table",
             (size_of::<GpuLightTableHeader>() + entry_count * size_of::<GpuLightEntry>()) as u64,
             storage,
-            MemoryLocation::CpuToGpu,
         )?;
-        let emitters = Buffer::new(
+        let emitters = StagedBuffer::new(
             ctx,
             "lights.emitters",
             (emitter_count.max(1) as usize * size_of::<GpuEmitter>()) as u64,
             storage,
-            MemoryLocation::CpuToGpu,
         )?;
         let emitter_base =
             gpu::upload::device_buffer(ctx, pool, "lights.emitter_base", bytemuck::cast_slice(&bases), storage)?;
@@ -239,8 +239,8 @@ impl LightTables {
     }
 
     pub fn write_set(&self, set: &DescriptorSet) {
-        set.write_buffer(binding::LIGHT_TABLE, BindingKind::StorageBuffer, &self.table);
-        set.write_buffer(binding::EMITTERS, BindingKind::StorageBuffer, &self.emitters);
+        set.write_buffer(binding::LIGHT_TABLE, BindingKind::StorageBuffer, self.table.buffer());
+        set.write_buffer(binding::EMITTERS, BindingKind::StorageBuffer, self.emitters.buffer());
         set.write_buffer(binding::EMITTER_BASE, BindingKind::StorageBuffer, &self.emitter_base);
         set.write_buffer(binding::ENV_TEXELS, BindingKind::StorageBuffer, &self.env_texels);
         set.write_buffer(binding::ENV_CDF, BindingKind::StorageBuffer, &self.env_cdf);
@@ -313,10 +313,12 @@ impl LightTables {
         Ok(())
     }
 
-    /// Records the copy of a staged grid into the device-local buffers, and the reset of the
-    /// learned visibility where the grid's cells moved, between barriers against the shaders
-    /// that read and write them. Nothing is recorded when nothing is pending.
+    /// Records the copies of the rewritten light table and emitters, and of a staged grid into
+    /// the device-local buffers with the reset of the learned visibility where the grid's cells
+    /// moved, between barriers against the shaders that read and write them. Nothing is
+    /// recorded when nothing is pending.
     pub fn record(&mut self, rec: &Recorder) {
+        staged::record_copies(rec, &mut [&mut self.table, &mut self.emitters]);
         let Some((cells_bytes, entries_bytes)) = self.grid_pending.take() else {
             return;
         };

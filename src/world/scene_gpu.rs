@@ -11,7 +11,9 @@ use crate::accel::{self, RayAccel};
 use crate::backend::Backend;
 use crate::gpu::{
     self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, Image,
-    MemoryLocation, Recorder, Sampler, SamplerDesc, ShaderLibrary, vk,
+    MemoryLocation, Recorder, Sampler, SamplerDesc, ShaderLibrary,
+    staged::{self, StagedBuffer},
+    vk,
 };
 use crate::scene::{self, LightKind, Pose, Scene};
 use anyhow::Result;
@@ -161,8 +163,9 @@ pub struct SceneGpu {
     pub indices: Buffer,
     pub meshes: Buffer,
     pub materials: Buffer,
-    pub instances: Buffer,
-    pub lights: Buffer,
+    /// Rewritten every frame (device-local, staged: gpu::staged).
+    pub instances: StagedBuffer,
+    pub lights: StagedBuffer,
     pub frame: Buffer,
     /// Mesh table as uploaded (first index, count, base vertex) for draws.
     pub mesh_table: Vec<GpuMesh>,
@@ -238,19 +241,17 @@ impl SceneGpu {
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
         let materials =
             gpu::upload::device_buffer(ctx, pool, "scene.materials", bytemuck::cast_slice(&materials), storage)?;
-        let instances = Buffer::new(
+        let instances = StagedBuffer::new(
             ctx,
             "scene.instances",
             (scene.instances.len().max(1) * size_of::<GpuInstance>()) as u64,
             storage,
-            MemoryLocation::CpuToGpu,
         )?;
-        let lights = Buffer::new(
+        let lights = StagedBuffer::new(
             ctx,
             "scene.lights",
             (scene.lights.len().max(1) * size_of::<GpuLight>()) as u64,
             storage,
-            MemoryLocation::CpuToGpu,
         )?;
         let frame = Buffer::new(
             ctx,
@@ -301,9 +302,9 @@ impl SceneGpu {
         set.write_buffer(binding::VERTICES, BindingKind::StorageBuffer, &vertices);
         set.write_buffer(binding::INDICES, BindingKind::StorageBuffer, &indices);
         set.write_buffer(binding::MESHES, BindingKind::StorageBuffer, &meshes);
-        set.write_buffer(binding::INSTANCES, BindingKind::StorageBuffer, &instances);
+        set.write_buffer(binding::INSTANCES, BindingKind::StorageBuffer, instances.buffer());
         set.write_buffer(binding::MATERIALS, BindingKind::StorageBuffer, &materials);
-        set.write_buffer(binding::LIGHTS, BindingKind::StorageBuffer, &lights);
+        set.write_buffer(binding::LIGHTS, BindingKind::StorageBuffer, lights.buffer());
         set.write_sampled_images(binding::TEXTURES, &texture_bindings);
         accel.write_set(&set);
         light_tables.write_set(&set);
@@ -392,6 +393,7 @@ impl SceneGpu {
     /// copied in, deformed vertices copied into the vertex buffer, then the ray backend's
     /// structures refit or rebuilt over them.
     pub fn record_update(&mut self, rec: &Recorder) -> Result<()> {
+        staged::record_copies(rec, &mut [&mut self.instances, &mut self.lights]);
         self.light_tables.record(rec);
         if let Some(deformer) = &mut self.deformer {
             deformer.record(rec, &self.vertices);
