@@ -104,7 +104,9 @@ impl FramePlan {
         } else {
             "shadows: every light is punctual: one hard-shadow ray per light, no penumbra detection or filter".into()
         });
-        let tinted = tinted_glass(scene);
+        // The chain shadows only punctual lights (emitters and the sky go through gi, whose
+        // light samples keep the colour).
+        let tinted = if shadowed.is_empty() { Vec::new() } else { tinted_glass(scene) };
         let tinted_shadows = !tinted.is_empty();
         if tinted_shadows {
             reasons.push(format!(
@@ -311,6 +313,10 @@ mod tests {
         };
         assert!(!tinted_with(blend), "blended surfaces let 1 - alpha through, grey");
         assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true).tinted_shadows);
+        let mut unlit = builtin::shadow_test();
+        unlit.materials[0] = glass(Vec3::new(1.0, 0.5, 0.25));
+        unlit.lights.clear();
+        assert!(!FramePlan::for_scene(&unlit, 0.6, true).tinted_shadows, "no punctual light: nothing to shadow");
     }
 
     #[test]
