@@ -49,6 +49,8 @@ enum Sun {
     Soft,
     /// No light: a white sky (a constant environment of radiance 1) all around.
     Sky,
+    /// The white sky, and the plane a smooth mirror (metallic, baseColor 0.9).
+    SkyOverMirror,
 }
 
 /// A dark 50 x 50 plane facing +Y at the origin, seen straight down from (0, 3, 0) through
@@ -56,11 +58,12 @@ enum Sun {
 /// (which the reference's longer paths and the hybrid frame's bounce add) stays small.
 fn scene(pane: Pane, sun: Sun) -> Scene {
     let mut s = Scene { name: "see-through".into(), ..Default::default() };
+    let (base, metallic, roughness) = if sun == Sun::SkyOverMirror { (0.9, 1.0, 0.0) } else { (0.2, 0.0, 1.0) };
     s.materials.push(Material {
         name: "plane".into(),
-        base_color_factor: Vec4::new(0.2, 0.2, 0.2, 1.0),
-        metallic_factor: 0.0,
-        roughness_factor: 1.0,
+        base_color_factor: Vec4::new(base, base, base, 1.0),
+        metallic_factor: metallic,
+        roughness_factor: roughness,
         ..Default::default()
     });
     s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::Z * 50.0, Vec3::X * 50.0, 0));
@@ -102,7 +105,7 @@ fn scene(pane: Pane, sun: Sun) -> Scene {
     let (kind, intensity, radius) = match sun {
         Sun::Hard => (LightKind::Directional, 3.0, 0.0),
         Sun::Soft => (LightKind::Point, 300.0, 0.5),
-        Sun::Sky => return s,
+        Sun::Sky | Sun::SkyOverMirror => return s,
     };
     s.lights.push(Light {
         name: "sun".into(),
@@ -122,7 +125,11 @@ fn mean_rgb(ctx: &Arc<Context>, pane: Pane, sun: Sun, reference: Option<u32>, fr
     let settings = Settings {
         width: SIZE,
         height: SIZE,
-        environment: Environment::Constant(if sun == Sun::Sky { Vec3::ONE } else { Vec3::ZERO }),
+        environment: Environment::Constant(if matches!(sun, Sun::Sky | Sun::SkyOverMirror) {
+            Vec3::ONE
+        } else {
+            Vec3::ZERO
+        }),
         mode: match reference {
             Some(max_bounces) => RenderMode::Reference { seed: 1, max_bounces },
             None => RenderMode::default(),
@@ -234,6 +241,20 @@ fn the_sky_through_smooth_thin_glass_lights_the_hybrid_frame() {
         let reference = mean_rgb(&ctx, pane, Sun::Sky, Some(8), 64);
         let hybrid = mean_rgb(&ctx, pane, Sun::Sky, None, 16);
         assert_hybrid_matches(&format!("{pane:?} under a white sky"), hybrid, reference);
+    }
+    common::assert_validation_clean(ctx);
+}
+
+/// The camera looks straight down at a mirror; its reflection ray goes straight up through the
+/// clear pane to the white sky. The reflection ray must pass the glass (before, it stopped
+/// there and showed what the pane reflects).
+#[test]
+fn a_mirror_shows_the_sky_through_smooth_thin_glass() {
+    let ctx = common::validated_context();
+    for pane in [Pane::None, Pane::Glass { roughness: 0.0 }] {
+        let reference = mean_rgb(&ctx, pane, Sun::SkyOverMirror, Some(8), 16);
+        let hybrid = mean_rgb(&ctx, pane, Sun::SkyOverMirror, None, 8);
+        assert_hybrid_matches(&format!("{pane:?} seen in a mirror"), hybrid, reference);
     }
     common::assert_validation_clean(ctx);
 }
