@@ -49,13 +49,15 @@ impl StagedBuffer {
 }
 
 /// Records the copies of what was written into `buffers` since their last copy, between barriers
-/// against every earlier and later use (shaders of any stage read them: the G-buffer's vertex
-/// shader reads the instances). Records nothing when nothing was written.
+/// against every earlier and later use (shaders of any stage read them, the G-buffer's vertex
+/// shader the instances; light_grid_update rewrites the grid's entries). Records nothing when
+/// nothing was written.
 pub fn record_copies(rec: &Recorder, buffers: &mut [&mut StagedBuffer]) {
     if buffers.iter().all(|b| b.pending.is_none()) {
         return;
     }
-    let shaders = (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ);
+    let shaders =
+        (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE);
     let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
     rec.memory_barrier(shaders, transfer);
     for b in buffers.iter_mut() {

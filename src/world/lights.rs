@@ -105,18 +105,15 @@ pub struct LightTables {
     env_texels: Buffer,
     env_cdf: Buffer,
     /// The light grid's header and cells, and its entries (at most `grid_capacity`); rebuilt
-    /// when the punctual lights change. Device-local.
-    grid: Buffer,
-    grid_entries: Buffer,
+    /// when the punctual lights change.
+    grid: StagedBuffer,
+    grid_entries: StagedBuffer,
     /// Per cell and light group, the visibility the hybrid frame learns
     /// (src/passes/light_grid_update.rs); reset when a rebuild moves the grid's cells.
     /// Device-local.
     grid_visibility: Buffer,
     grid_capacity: usize,
-    /// A rebuilt grid waiting for `record`: its header and cells, then its entries, and the
-    /// pending copy's (cells bytes, entries bytes); whether the visibility is to be reset.
-    grid_staging: Buffer,
-    grid_pending: Option<(u64, u64)>,
+    /// Whether the next `record` resets the visibility.
     visibility_reset_pending: bool,
     /// The header of the grid last written (where its cells are).
     grid_header: GpuLightGridHeader,
@@ -172,7 +169,7 @@ impl LightTables {
         let grid_cells = (light_grid::RESOLUTION as usize).pow(3);
         let device_storage = storage | vk::BufferUsageFlags::TRANSFER_DST;
         let grid_bytes = size_of::<GpuLightGridHeader>() + grid_cells * size_of::<[u32; 2]>();
-        let grid = Buffer::new(ctx, "lights.grid", grid_bytes as u64, device_storage, MemoryLocation::GpuOnly)?;
+        let grid = StagedBuffer::new(ctx, "lights.grid", grid_bytes as u64, storage)?;
         // Room for the grid of the lights as they are now, twice over, so that lights that move
         // rarely need a coarser grid, up to MAX_ENTRIES; and at least for every resampled light
         // once (one cell).
@@ -192,15 +189,7 @@ impl LightTables {
         let at_load_entries = grid_at_load.as_ref().map_or(0, |(_, _, grid)| grid.entries.len());
         let grid_capacity = (2 * at_load_entries).min(light_grid::MAX_ENTRIES).max(scene.lights.len()).max(1);
         let entries_bytes = grid_capacity * size_of::<GpuLightGridEntry>();
-        let grid_entries =
-            Buffer::new(ctx, "lights.grid_entries", entries_bytes as u64, device_storage, MemoryLocation::GpuOnly)?;
-        let grid_staging = Buffer::new(
-            ctx,
-            "lights.grid (staging)",
-            (grid_bytes + entries_bytes) as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
+        let grid_entries = StagedBuffer::new(ctx, "lights.grid_entries", entries_bytes as u64, storage)?;
         let visibility_count =
             if grid_enabled { light_grid::RESOLUTION.pow(3) * light_grid::GROUP_COUNT } else { 1 } as usize;
         let grid_visibility = Buffer::new(
@@ -220,8 +209,6 @@ impl LightTables {
             grid_entries,
             grid_visibility,
             grid_capacity,
-            grid_staging,
-            grid_pending: None,
             // The device-local buffer starts undefined.
             visibility_reset_pending: true,
             grid_header: GpuLightGridHeader::default(),
@@ -244,8 +231,8 @@ impl LightTables {
         set.write_buffer(binding::EMITTER_BASE, BindingKind::StorageBuffer, &self.emitter_base);
         set.write_buffer(binding::ENV_TEXELS, BindingKind::StorageBuffer, &self.env_texels);
         set.write_buffer(binding::ENV_CDF, BindingKind::StorageBuffer, &self.env_cdf);
-        set.write_buffer(binding::LIGHT_GRID, BindingKind::StorageBuffer, &self.grid);
-        set.write_buffer(binding::LIGHT_GRID_ENTRIES, BindingKind::StorageBuffer, &self.grid_entries);
+        set.write_buffer(binding::LIGHT_GRID, BindingKind::StorageBuffer, self.grid.buffer());
+        set.write_buffer(binding::LIGHT_GRID_ENTRIES, BindingKind::StorageBuffer, self.grid_entries.buffer());
         set.write_buffer(binding::LIGHT_GRID_VISIBILITY, BindingKind::StorageBuffer, &self.grid_visibility);
     }
 
@@ -297,45 +284,36 @@ impl LightTables {
         self.stage_grid(&grid.header, &grid.cells, &grid.entries)
     }
 
-    /// Writes a grid into the staging buffer for the next `record`.
+    /// Writes a grid for the next `record` to copy in.
     fn stage_grid(
         &mut self,
         header: &GpuLightGridHeader,
         cells: &[[u32; 2]],
         entries: &[GpuLightGridEntry],
     ) -> Result<()> {
-        let cells_bytes = size_of::<GpuLightGridHeader>() + size_of_val(cells);
-        self.grid_staging.write(0, bytemuck::bytes_of(header))?;
-        self.grid_staging.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(cells))?;
-        self.grid_staging.write(cells_bytes, bytemuck::cast_slice(entries))?;
+        self.grid.write(0, bytemuck::bytes_of(header))?;
+        self.grid.write(size_of::<GpuLightGridHeader>(), bytemuck::cast_slice(cells))?;
+        self.grid_entries.write(0, bytemuck::cast_slice(entries))?;
         self.grid_header = *header;
-        self.grid_pending = Some((cells_bytes as u64, size_of_val(entries) as u64));
         Ok(())
     }
 
-    /// Records the copies of the rewritten light table and emitters, and of a staged grid into
-    /// the device-local buffers with the reset of the learned visibility where the grid's cells
+    /// Records the copies of what was rewritten (light table, emitters, grid) into the
+    /// device-local buffers, and the reset of the learned visibility where the grid's cells
     /// moved, between barriers against the shaders that read and write them. Nothing is
     /// recorded when nothing is pending.
     pub fn record(&mut self, rec: &Recorder) {
-        staged::record_copies(rec, &mut [&mut self.table, &mut self.emitters]);
-        let Some((cells_bytes, entries_bytes)) = self.grid_pending.take() else {
-            return;
-        };
-        let shaders = (
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-        );
-        let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
-        rec.memory_barrier(shaders, transfer);
-        rec.copy_buffer_regions(&self.grid_staging, &self.grid, &[(0, 0, cells_bytes)]);
-        if entries_bytes > 0 {
-            rec.copy_buffer_regions(&self.grid_staging, &self.grid_entries, &[(cells_bytes, 0, entries_bytes)]);
-        }
+        staged::record_copies(rec, &mut [&mut self.table, &mut self.emitters, &mut self.grid, &mut self.grid_entries]);
         if std::mem::take(&mut self.visibility_reset_pending) {
+            let shaders = (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            );
+            let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+            rec.memory_barrier(shaders, transfer);
             rec.zero_buffer(&self.grid_visibility);
+            rec.memory_barrier(transfer, shaders);
         }
-        rec.memory_barrier(transfer, shaders);
     }
 
     /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build;
