@@ -230,19 +230,25 @@ fn tinted_glass_colours_a_soft_light_in_the_hybrid_frame() {
     common::assert_validation_clean(ctx);
 }
 
+/// The white sky with and without the clear pane, `sun` being one of the sky settings: the
+/// hybrid frame after `frames` frames against the reference at `spp`.
+fn assert_sky_through_glass_matches(sun: Sun, spp: u32, frames: u32) {
+    let ctx = common::validated_context();
+    for pane in [Pane::None, Pane::Glass { roughness: 0.0 }] {
+        let reference = mean_rgb(&ctx, pane, sun, Some(8), spp);
+        let hybrid = mean_rgb(&ctx, pane, sun, None, frames);
+        assert_hybrid_matches(&format!("{pane:?}, {sun:?}"), hybrid, reference);
+    }
+    common::assert_validation_clean(ctx);
+}
+
 /// Under a white sky the plane sees the sky through the pane (it covers 97% of the plane's
 /// cosine-weighted hemisphere): gi's bounce rays must pass smooth thin glass as its light
 /// samples' shadow rays do, or the bounce's share of the sky (multiple importance sampling
 /// splits it between the two) goes missing.
 #[test]
 fn the_sky_through_smooth_thin_glass_lights_the_hybrid_frame() {
-    let ctx = common::validated_context();
-    for pane in [Pane::None, Pane::Glass { roughness: 0.0 }] {
-        let reference = mean_rgb(&ctx, pane, Sun::Sky, Some(8), 64);
-        let hybrid = mean_rgb(&ctx, pane, Sun::Sky, None, 16);
-        assert_hybrid_matches(&format!("{pane:?} under a white sky"), hybrid, reference);
-    }
-    common::assert_validation_clean(ctx);
+    assert_sky_through_glass_matches(Sun::Sky, 64, 16);
 }
 
 /// The camera looks straight down at a mirror; its reflection ray goes straight up through the
@@ -250,11 +256,5 @@ fn the_sky_through_smooth_thin_glass_lights_the_hybrid_frame() {
 /// there and showed what the pane reflects).
 #[test]
 fn a_mirror_shows_the_sky_through_smooth_thin_glass() {
-    let ctx = common::validated_context();
-    for pane in [Pane::None, Pane::Glass { roughness: 0.0 }] {
-        let reference = mean_rgb(&ctx, pane, Sun::SkyOverMirror, Some(8), 16);
-        let hybrid = mean_rgb(&ctx, pane, Sun::SkyOverMirror, None, 8);
-        assert_hybrid_matches(&format!("{pane:?} seen in a mirror"), hybrid, reference);
-    }
-    common::assert_validation_clean(ctx);
+    assert_sky_through_glass_matches(Sun::SkyOverMirror, 16, 8);
 }
