@@ -9,8 +9,10 @@
 //! are skinned on the CPU too ([`crate::scene::SkinnedMesh::skin`], the same formula).
 
 use crate::gpu::{
-    Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, MemoryLocation, Pipeline,
-    Recorder, ShaderLibrary, vk,
+    Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, DescriptorSetLayout, Pipeline, Recorder,
+    ShaderLibrary,
+    staged::{self, StagedBuffer},
+    vk,
 };
 use crate::scene::{Pose, Scene};
 use anyhow::{Result, bail};
@@ -40,7 +42,7 @@ pub struct Skinner {
     _bind_vertices: Buffer,
     _influences: Buffer,
     /// Per skinned mesh, its joints' matrices this frame then last frame's.
-    joints: Buffer,
+    joints: StagedBuffer,
     dispatches: Vec<Dispatch>,
     /// Per skinned mesh: the (this frame, last frame) matrices last dispatched.
     applied: Vec<Option<(Vec<Mat4>, Vec<Mat4>)>>,
@@ -109,12 +111,12 @@ impl Skinner {
             bytemuck::cast_slice(&influences),
             storage,
         )?;
-        let joints_buf = Buffer::new(ctx, "skinning.joints", joint_bytes, storage, MemoryLocation::CpuToGpu)?;
+        let joints_buf = StagedBuffer::new(ctx, "skinning.joints", joint_bytes, storage)?;
         let b = |binding| Binding { binding, kind: BindingKind::StorageBuffer, count: 1 };
         let set_layout = DescriptorSetLayout::new(ctx, &[b(0), b(1), b(2), b(3), b(4)], false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;
         for (binding, buffer) in
-            [(0, &bind_vertices), (1, &influences_buf), (2, &joints_buf), (3, vertices), (4, prev_positions)]
+            [(0, &bind_vertices), (1, &influences_buf), (2, joints_buf.buffer()), (3, vertices), (4, prev_positions)]
         {
             set.write_buffer(binding, BindingKind::StorageBuffer, buffer);
         }
@@ -180,6 +182,7 @@ impl Skinner {
         if self.pending.is_empty() {
             return;
         }
+        staged::record_copies(rec, &mut [&mut self.joints]);
         let (readers, reads) = super::deform::vertex_readers(self.ray_query);
         let write = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
         // Last frame's skinning wrote what this one overwrites: its writes are ordered too.
