@@ -196,19 +196,11 @@ void shade(ivec2 px) {
     if ((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0) {
         vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
-        // Straight on through see-through surfaces, as the light sample's shadow ray goes (one
-        // call site in a loop: see above).
+        // Straight on through see-through surfaces, as the light sample's shadow ray goes.
         vec3 through = vec3(1.0);
-        vec3 from = origin;
-        Hit h;
         HitSurface s;
-        [[dont_unroll]] for (uint crossed = 0u;; ++crossed) {
-            h = trace_closest(from, dir, 0.0, 1e6, RAY_MASK_ALL);
-            if (h.instance == NO_HIT) break;
-            s = hit_surface(h.instance, h.primitive, h.bary, dir);
-            if (crossed == PASS_THROUGH_MAX || !pass_through(s, dir, through, rng)) break;
-            from = offset_ray(s.position, -s.normal_geo);
-        }
+        float travelled;
+        Hit h = trace_closest_through(origin, dir, through, rng, s, travelled);
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
         if (h.instance == NO_HIT) {
             bounce = env_eval(dir) * mis_power(pdf, light_pdf_environment(dir));

@@ -91,18 +91,11 @@ void update(uint slot) {
         vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
         vec3 estimate = vec3(0.0);
         if (dot(dir, n) > 0.0) {
-            // Straight on through see-through surfaces, like every ray of the paths
-            // (common/pass_through.glsl; one call site in a loop).
+            // Straight on through see-through surfaces, like every ray of the paths.
             vec3 passed = vec3(1.0);
-            Hit h;
             HitSurface s;
-            [[dont_unroll]] for (uint crossed = 0u;; ++crossed) {
-                h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
-                if (h.instance == NO_HIT) break;
-                s = hit_surface(h.instance, h.primitive, h.bary, dir);
-                if (crossed == PASS_THROUGH_MAX || !pass_through(s, dir, passed, rng)) break;
-                origin = offset_ray(s.position, -s.normal_geo);
-            }
+            float travelled;
+            Hit h = trace_closest_through(origin, dir, passed, rng, s, travelled);
             if (h.instance != NO_HIT) {
                 // Cosine sampling: (1/pi) L cos / pdf is L.
                 // A young cell (or any, right after the lights changed) traces its path deep

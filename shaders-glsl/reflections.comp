@@ -205,19 +205,10 @@ void main() {
         }
         if (dot(l, ng) <= 0.0) continue;
         // Straight on through see-through surfaces (a window seen in a mirror shows what lies
-        // behind it); the hit distance runs to where the ray stops. One call site in a loop.
-        vec3 from = origin;
-        float travelled = 0.0;
-        Hit h;
+        // behind it); the hit distance runs to where the ray stops.
         HitSurface s;
-        [[dont_unroll]] for (uint crossed = 0u;; ++crossed) {
-            h = trace_closest(from, l, 0.0, 1e6, RAY_MASK_ALL);
-            if (h.instance == NO_HIT) break;
-            travelled += h.t;
-            s = hit_surface(h.instance, h.primitive, h.bary, l);
-            if (crossed == PASS_THROUGH_MAX || !pass_through(s, l, weight, rng)) break;
-            from = offset_ray(s.position, -s.normal_geo);
-        }
+        float travelled;
+        Hit h = trace_closest_through(origin, l, weight, rng, s, travelled);
         if (h.instance == NO_HIT) {
             sum += weight * env_eval(l);
         } else {

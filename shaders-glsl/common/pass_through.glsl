@@ -7,10 +7,11 @@
 #ifndef PASS_THROUGH_GLSL
 #define PASS_THROUGH_GLSL
 
-#include "hit.glsl"
+#include "trace.glsl"
 #include "brdf.glsl"
 #include "transmission.glsl"
 #include "sampling.glsl"
+#include "ray_offset.glsl"
 
 // Most see-through surfaces one ray passes.
 #define PASS_THROUGH_MAX 4u
@@ -36,6 +37,24 @@ bool pass_through(HitSurface s, vec3 dir, inout vec3 weight, inout Rng rng) {
     }
     weight /= 1.0 - chance;
     return false;
+}
+
+// The closest hit along `dir` from `from`, going straight on through see-through surfaces
+// (pass_through, at most PASS_THROUGH_MAX), `weight` scaled by what passes; `s` is the surface
+// where the ray stopped (unset when it escaped) and `travelled` the distance to it. One trace
+// call site in a loop: the compute backend inlines a traversal at every call site.
+Hit trace_closest_through(vec3 from, vec3 dir, inout vec3 weight, inout Rng rng, out HitSurface s, out float travelled) {
+    Hit h;
+    travelled = 0.0;
+    [[dont_unroll]] for (uint crossed = 0u;; ++crossed) {
+        h = trace_closest(from, dir, 0.0, 1e6, RAY_MASK_ALL);
+        if (h.instance == NO_HIT) break;
+        travelled += h.t;
+        s = hit_surface(h.instance, h.primitive, h.bary, dir);
+        if (crossed == PASS_THROUGH_MAX || !pass_through(s, dir, weight, rng)) break;
+        from = offset_ray(s.position, -s.normal_geo);
+    }
+    return h;
 }
 
 #endif

@@ -197,9 +197,7 @@ fn scene_diagonal(scene: &Scene) -> f32 {
 fn tinted_glass(scene: &Scene) -> Vec<&str> {
     let grey = |c: [f32; 3]| c[0] == c[1] && c[1] == c[2];
     let texture_grey = |t: TextureRef| {
-        let image =
-            scene.textures.get(t.texture as usize).and_then(|t| t.image).and_then(|i| scene.images.get(i as usize));
-        image.is_none_or(|img| img.rgba8.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2]))
+        texture_image(scene, t).is_none_or(|img| img.rgba8.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2]))
     };
     scene
         .materials
@@ -222,12 +220,16 @@ fn list(names: &[&str]) -> String {
     s
 }
 
+/// The decoded image a material's texture reference points at, if any.
+fn texture_image(scene: &Scene, t: TextureRef) -> Option<&crate::scene::Image> {
+    scene.textures.get(t.texture as usize).and_then(|t| t.image).and_then(|i| scene.images.get(i as usize))
+}
+
 /// The lowest roughness a material reaches: its factor times the smallest green value of its
 /// metallic-roughness texture (the texture can only lower it).
 fn min_roughness(scene: &Scene, factor: f32, texture: Option<TextureRef>) -> f32 {
     let Some(t) = texture else { return factor };
-    let image = scene.textures.get(t.texture as usize).and_then(|t| t.image).and_then(|i| scene.images.get(i as usize));
-    match image {
+    match texture_image(scene, t) {
         Some(img) => {
             let min_g = img.rgba8.chunks_exact(4).map(|p| p[1]).min().unwrap_or(255);
             factor * min_g as f32 / 255.0
