@@ -12,9 +12,9 @@
 //
 // What it covers, so that nothing is counted twice (see composite.comp):
 // - direct light on the diffuse lobe from emissive triangles and the environment: a light
-//   sample (punctual lights, which composite shades with ray-traced shadows, are skipped when
-//   chosen) and the bounce ray hitting an emitter or escaping, combined with the power
-//   heuristic;
+//   sample drawn among those alone (the punctual lights are shaded by composite with
+//   ray-traced shadows, or resampled below: a draw that could pick one would be wasted there)
+//   and the bounce ray hitting an emitter or escaping, combined with the power heuristic;
 // - direct light from the punctual lights past the first SHADOWED_LIGHTS (composite shades those
 //   with the shadows chain's visibility): one light per pixel resampled from candidates and
 //   last frame's choice (common/light_reservoir.glsl), whatever the number of lights; its
@@ -41,6 +41,7 @@
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
+#include "common/area_lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 #include "common/light_reservoir.glsl"
@@ -128,8 +129,8 @@ void shade(ivec2 px) {
     // emitter it aims at. Three shadow rays at most, from one call site (the compute backend
     // inlines its traversal at every call, and each copy lengthens a CPU driver's compile; an
     // unrolled loop would copy it again):
-    //   0: a light sample for emitters and the environment (a punctual light drawn here is
-    //      skipped: composite or the reservoir shades it);
+    //   0: a light sample of the emitters and the environment alone (area_light_sample: the
+    //      punctual lights are composite's or the reservoir's);
     //   1: the frame's resampled-light candidate, tested before it is merged;
     //   2: last frame's resampled light, re-tested where it wins the merge.
     ShadingPoint sp = ShadingPoint(origin, n, ng, v, m);
@@ -140,10 +141,16 @@ void shade(ivec2 px) {
         prev = previous_reservoir(px, ids.x, depth, ng, sp);
     }
     NeeSample chosen = nee_none();  // the resampled light's sample, once found visible
+    // The area lights' share of the light table, which their sampler's densities are divided
+    // by (0: none, and nothing to draw).
+    float area_share = area_light_share();
     [[dont_unroll]] for (uint k = 0u; k < 3u; ++k) {
         NeeSample ls;
         if (k == 0u) {
-            ls = light_sample(origin, rng_next3(rng));
+            // The numbers are drawn either way, so scenes without area lights keep their streams.
+            vec3 u = rng_next3(rng);
+            if (!(area_share > 0.0)) continue;
+            ls = area_light_sample(origin, u, area_share);
             if (!(ls.pdf > 0.0)) continue;
         } else if (k == 1u) {
             if (!(r.w_sum > 0.0)) continue;
@@ -203,10 +210,10 @@ void shade(ivec2 px) {
         Hit h = trace_closest_through(origin, dir, through, rng, s, travelled);
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
         if (h.instance == NO_HIT) {
-            bounce = env_eval(dir) * mis_power(pdf, light_pdf_environment(dir));
+            bounce = env_eval(dir) * (area_share > 0.0 ? mis_power(pdf, light_pdf_environment(dir) / area_share) : 1.0);
         } else {
             if (emitter_visible_side(h.instance, h.primitive, dir)) {
-                float lp = light_pdf_emitter(h.instance, h.primitive, origin, s.position);
+                float lp = area_share > 0.0 ? light_pdf_emitter(h.instance, h.primitive, origin, s.position) / area_share : 0.0;
                 bounce += s.mat.emissive * mis_power(pdf, lp);
             }
             uint traced = max(params.bounces, 1u);

@@ -2,7 +2,11 @@
 // reflections: the specular lobe, ray traced. Per pixel `rays` directions drawn from the GGX
 // distribution of visible normals (a perfect mirror reflects exactly); each hit is shaded with
 // its emission and a light sample toward a light chosen by power (with a shadow ray); rays that
-// escape see the environment; the radiance cache adds the hit's indirect light. Surfaces
+// escape see the environment; the radiance cache adds the hit's indirect light. A glossy lobe
+// also takes a light sample of the emitters and the environment per ray, combined with the
+// ray by the power heuristic: a sun or a small emitter is a narrow, bright target that the
+// lobe's own rays find too rarely (and the denoiser's outlier clamp then cuts the rare hits
+// that do: the highlight went missing). Surfaces
 // rougher than the cut-off trace nothing and take the specular estimate the gi pass made from
 // its own samples (gi.specular); under the cut-off gi.specular holds the lobe's share of the
 // resampled punctual lights, which no ray can hit, and is added. Transmissive surfaces add the
@@ -14,6 +18,7 @@
 #include "common/brdf.glsl"
 #include "common/transmission.glsl"
 #include "common/light_sampling.glsl"
+#include "common/area_lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 #define RC_BINDING 9
@@ -43,11 +48,12 @@ layout(push_constant) uniform Params {
 // Below this roughness the surface is a mirror: one exact reflection, no sampling.
 #define MIRROR_ROUGHNESS 0.01
 
-// Radiance leaving hit h (surface s) toward -dir: emission, a light sample, and what the surface
-// reflects from other surfaces, from the radiance cache (with the cache off, the path traced on
-// for as many vertices as gi traces).
-vec3 shade_hit(Hit h, HitSurface s, vec3 dir, inout Rng rng) {
-    vec3 radiance = emitter_visible_side(h.instance, h.primitive, dir) ? s.mat.emissive : vec3(0.0);
+// Radiance leaving hit h (surface s) toward -dir: emission (times `emission_weight`, its MIS
+// weight against a light sample), a light sample, and what the surface reflects from other
+// surfaces, from the radiance cache (with the cache off, the path traced on for as many
+// vertices as gi traces).
+vec3 shade_hit(Hit h, HitSurface s, vec3 dir, float emission_weight, inout Rng rng) {
+    vec3 radiance = emitter_visible_side(h.instance, h.primitive, dir) ? s.mat.emissive * emission_weight : vec3(0.0);
     uint vertices = rc.enabled != 0u ? RC_VERTICES : max(params.bounces, 1u);
     return radiance + rc_radiance_leaving(s, dir, h.t, 0u, vertices, true, rc_copy_written(frame.frame_index), rng);
 }
@@ -99,7 +105,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
         // inner side reflects by the interface sample below instead.
         bool inner_side = hm.thickness > 0.0 && !s.front;
         if (through <= 0.0 || !inner_side) {
-            emitted += weight * shade_hit(h, s, dir, rng);
+            emitted += weight * shade_hit(h, s, dir, 1.0, rng);
         } else if (emitter_visible_side(h.instance, h.primitive, dir)) {
             emitted += weight * s.mat.emissive;
         }
@@ -135,10 +141,23 @@ vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng) {
         if (h.instance == NO_HIT) return env_eval(dir);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         bool blended = (materials[s.material].flags & MATERIAL_BLEND) != 0u;
-        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) return shade_hit(h, s, dir, rng);
+        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) return shade_hit(h, s, dir, 1.0, rng);
         origin = offset_ray(s.position, -s.normal_geo);
     }
     return vec3(0.0);
+}
+
+// The glossy lobe's light sample of the emitters and the environment (area_light_sample), with
+// a shadow ray that passes see-through surfaces, weighted against the lobe's own ray by the
+// power heuristic.
+vec3 area_light_estimate(vec3 origin, vec3 n, vec3 ng, vec3 v, BrdfInput m, float share, inout Rng rng) {
+    NeeSample ls = area_light_sample(origin, rng_next3(rng), share);
+    if (!(ls.pdf > 0.0) || dot(ls.dir, ng) <= 0.0) return vec3(0.0);
+    vec3 f = brdf_eval_specular_cos(m, n, v, ls.dir);
+    if (dot(f, f) <= 0.0) return vec3(0.0);
+    float pdf = ggx_vndf_pdf(max(dot(n, v), 1e-4), max(dot(n, normalize(v + ls.dir)), 0.0), ggx_alpha(m.roughness));
+    vec3 seen = trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
+    return ls.weight * f * seen * mis_power(ls.pdf, pdf);
 }
 
 void main() {
@@ -184,11 +203,18 @@ void main() {
     vec3 v_local = vec3(dot(v, basis[0]), dot(v, basis[1]), n_dot_v);
     float alpha = ggx_alpha(m.roughness);
     uint count = max(params.rays, 1u);
+    bool mirror = m.roughness < MIRROR_ROUGHNESS;
+    // The area lights' share of the light table: 0 where there are none (or on a mirror, whose
+    // lobe no light sample can hit), and then no numbers are drawn for them and the streams are
+    // as before.
+    float area_share = mirror ? 0.0 : area_light_share();
     vec3 sum = vec3(0.0);
     float dist_sum = 0.0, hits = 0.0;
     for (uint i = 0u; i < count; ++i) {
+        if (area_share > 0.0) sum += area_light_estimate(origin, n, ng, v, m, area_share, rng);
         vec3 l, weight;
-        if (m.roughness < MIRROR_ROUGHNESS) {
+        float pdf = 0.0;  // the ray's solid-angle density (0: a mirror's delta lobe)
+        if (mirror) {
             l = reflect(-v, n);
             weight = fresnel_schlick(f0, n_dot_v);
         } else {
@@ -202,6 +228,7 @@ void main() {
             float n_dot_l = l_local.z;
             float g2 = smith_visibility(n_dot_l, n_dot_v, alpha) * 4.0 * n_dot_l * n_dot_v;
             weight = fresnel_schlick(f0, dot(v, h)) * g2 / ggx_g1(n_dot_v, alpha);
+            pdf = ggx_vndf_pdf(n_dot_v, h_local.z, alpha);
         }
         if (dot(l, ng) <= 0.0) continue;
         // Straight on through see-through surfaces (a window seen in a mirror shows what lies
@@ -210,9 +237,11 @@ void main() {
         float travelled;
         Hit h = trace_closest_through(origin, l, weight, rng, s, travelled);
         if (h.instance == NO_HIT) {
-            sum += weight * env_eval(l);
+            float w = area_share > 0.0 ? mis_power(pdf, light_pdf_environment(l) / area_share) : 1.0;
+            sum += weight * env_eval(l) * w;
         } else {
-            sum += weight * shade_hit(h, s, l, rng);
+            float w = area_share > 0.0 ? mis_power(pdf, light_pdf_emitter(h.instance, h.primitive, origin, s.position) / area_share) : 1.0;
+            sum += weight * shade_hit(h, s, l, w, rng);
             dist_sum += travelled;
             hits += 1.0;
         }
