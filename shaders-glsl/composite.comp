@@ -42,15 +42,16 @@ layout(set = 1, binding = 10, rgba32f) uniform writeonly image2D out_color;
 // Kaplanyan 2019): a point light's highlight on a curved glossy surface can be smaller than a
 // pixel. The jittered frame then sees it in some frames and misses it in others, and TAA's
 // neighbourhood clamp throws the history that holds it away: over LightsPunctualLamp's brass
-// arm (128x96) the frame kept 0.36 of the reference's light, 0.74 with the clamp off. The lobe
+// body (128x96) the frame kept 0.36 of the reference's light, 0.74 with the clamp off. The lobe
 // is widened by the spread of the shading normal over the pixel (its differences to the next
 // pixels on the same instance), GGX alpha^2 + min(2 sigma^2, SPECULAR_AA_MAX): the pixel's
-// share of the highlight, spread over the pixels that average it. The arm now keeps 0.48 at
-// 128x96 and 0.69 at 512x384 (0.60 before; 0.71 and 0.70 without TAA, before and after: the
-// widening keeps the energy). Only here: the lights sampled by rays are averaged by the
-// denoiser, and a curved mirror would turn glossy.
+// share of the highlight, spread over the pixels that average it. The body now keeps 0.54 at
+// 128x96 and 0.72 at 512x384 (0.60 before; without TAA 0.71 before and 0.74 after). A wider
+// cap did worse (alpha^2 up to 0.18: 0.48 and 0.69): a rough lobe masks and shadows more of
+// its own light at the grazing angles of a curved surface. Only here: the lights sampled by
+// rays are averaged by the denoiser, and a curved mirror would turn glossy.
 #define SPECULAR_AA_VARIANCE 0.25  // the footprint's variance (pixel^2) that scales the squared differences
-#define SPECULAR_AA_MAX 0.18       // the most alpha^2 it adds
+#define SPECULAR_AA_MAX 0.02       // the most alpha^2 it adds
 float antialiased_roughness(ivec2 px, uint instance, vec3 n, float roughness) {
     float spread = 0.0;
     for (int axis = 0; axis < 2; ++axis) {
