@@ -221,7 +221,7 @@ fn default_scene_loads_and_renders_a_lit_picture() {
 /// `reference` at this size gave 0.65 where they now give 0.87. Most of the rest is lost in the
 /// filters, which take a highlight of a pixel or two for an outlier: 0.91 without TAA, 0.95
 /// without SVGF's outlier clamp too. One raw frame averages 0.96 over eight seeds, and the
-/// reference's own mean moves by 3% between seeds at 64 spp.
+/// reference's own mean moves by 3% between seeds at 128 spp (320x240).
 const GLOSSY_SUN_RANGE: std::ops::RangeInclusive<f64> = 0.8..=1.15;
 
 /// Glossy metal under the default light keeps the sun's highlight. The sun is a small, very
