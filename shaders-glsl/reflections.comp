@@ -64,10 +64,16 @@ vec3 shade_hit(Hit h, HitSurface s, vec3 dir, float emission_weight, inout Rng r
 // Inside a volume the interface reflects or lets the path out (Beer-Lambert absorbing on the
 // way); a further transmissive surface adds what it reflects and is passed through. The weight
 // excludes the surface's transmitted share, which the caller applies.
+// `seen_at`: for thin-walled glass, how far along the view ray the path went before it stopped
+// at an opaque surface (thin glass does not bend a ray: what is seen through it is there, on
+// the view ray's line), which the denoiser and TAA reproject what the glass lets through by;
+// 0 where the path escaped, or entered a volume, whose refraction bends it off that line.
 #define TRANSMISSION_EVENTS 8u
 // Up to this many punctual lights, each is sampled through thin-walled glass.
 #define GLASS_LIGHTS 8u
-vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInput m, MaterialInfo mi, inout Rng rng) {
+vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInput m, MaterialInfo mi, inout Rng rng,
+                          out float seen_at) {
+    seen_at = 0.0;
     m.dielectric_f0 = dielectric_f0(mi.ior);
     bool thin = mi.thickness <= 0.0;
     TransmissionSample ts = transmission_sample(m, thin, mi.ior, n, v, rng_next2(rng));
@@ -93,9 +99,11 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
         }
     }
     if (dot(weight, weight) <= 0.0) return emitted;
+    float travelled = 0.0;  // along a straight line (thin glass only)
     for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
         if (h.instance == NO_HIT) return emitted + weight * env_eval(dir);
+        travelled += h.t;
         if (any(greaterThan(absorption, vec3(0.0)))) weight *= exp(-absorption * h.t);
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         MaterialInfo hm = materials[s.material];
@@ -109,7 +117,10 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
         } else if (emitter_visible_side(h.instance, h.primitive, dir)) {
             emitted += weight * s.mat.emissive;
         }
-        if (through <= 0.0) return emitted;
+        if (through <= 0.0) {
+            seen_at = thin ? travelled : 0.0;
+            return emitted;
+        }
         BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
         TransmissionSample next;
         if (inner_side) {
@@ -120,6 +131,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
             next.weight *= through;
             if (hm.thickness > 0.0) {
                 absorption = volume_absorption(hm);
+                thin = false;
             }
         }
         weight *= next.weight;
@@ -131,20 +143,37 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
 }
 
 // What a blended surface lets through toward v: the view ray continued past it, through further
-// blended surfaces with the chance of their uncovered share, shaded where it stops.
+// blended surfaces with the chance of their uncovered share, shaded where it stops, `seen_at`
+// beyond p (0 where the ray escaped).
 #define BLEND_LAYERS 4u
-vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng) {
+vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng, out float seen_at) {
+    seen_at = 0.0;
     vec3 origin = offset_ray_origin(p, -ng, depth);
     vec3 dir = -v;
+    float travelled = 0.0;
     for (uint layer = 0u; layer < BLEND_LAYERS; ++layer) {
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
         if (h.instance == NO_HIT) return env_eval(dir);
+        travelled += h.t;
         HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
         bool blended = (materials[s.material].flags & MATERIAL_BLEND) != 0u;
-        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) return shade_hit(h, s, dir, 1.0, rng);
+        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) {
+            seen_at = travelled;
+            return shade_hit(h, s, dir, 1.0, rng);
+        }
         origin = offset_ray(s.position, -s.normal_geo);
     }
     return vec3(0.0);
+}
+
+// reflections.hit_distance: where the specular signal's history is fetched from. A positive
+// distance is the reflection's (its virtual point, followed as far as the lobe is narrow), a
+// negative one that of what the surface lets through along the view ray (thin glass, a blended
+// surface: there, whatever the roughness), 0 the surface itself. It follows whichever of the
+// reflected and the let-through light is the larger.
+float history_distance(vec3 reflected, float reflected_at, vec3 through, float through_at) {
+    if (through_at > 0.0 && luminance(through) >= luminance(reflected)) return -through_at;
+    return reflected_at;
 }
 
 // The glossy lobe's light sample of the emitters and the environment (area_light_sample), with
@@ -183,19 +212,24 @@ void main() {
     // Glass: what it lets through joins the specular signal (composite leaves its share out of
     // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
     float transmitted = mr.w * (1.0 - m.metallic);
-    vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng) : vec3(0.0);
+    float seen_at = 0.0;
+    vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng, seen_at) : vec3(0.0);
     // A blended surface covers the share alpha of the pixel (composite scales its own light by
     // it); the rest shows what lies behind, added here.
     float cover = 1.0;
     vec3 behind = vec3(0.0);
+    float behind_at = 0.0;
     if ((mi.flags & MATERIAL_BLEND) != 0u) {
         cover = imageLoad(g_base_color, px).a;
-        if (cover < 1.0) behind = (1.0 - cover) * behind_blend(p, ng, v, depth, rng);
+        if (cover < 1.0) behind = (1.0 - cover) * behind_blend(p, ng, v, depth, rng, behind_at);
     }
+    // What the pixel shows through the surface: behind a blend, else through the glass.
+    vec3 let_through = luminance(behind) >= luminance(cover * through) ? behind : cover * through;
+    float let_through_at = luminance(behind) >= luminance(cover * through) ? behind_at : seen_at;
 
     if (m.roughness > params.roughness_cutoff) {
         imageStore(out_radiance, px, vec4(cover * (imageLoad(in_specular, px).rgb + through) + behind, 1.0));
-        imageStore(out_hit_distance, px, vec4(0.0));
+        imageStore(out_hit_distance, px, vec4(history_distance(vec3(0.0), 0.0, let_through, let_through_at)));
         return;
     }
     vec3 origin = offset_ray_origin(p, ng, depth);
@@ -246,6 +280,8 @@ void main() {
             hits += 1.0;
         }
     }
-    imageStore(out_radiance, px, vec4(cover * (sum / float(count) + imageLoad(in_specular, px).rgb + through) + behind, 1.0));
-    imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
+    vec3 reflected = sum / float(count);
+    imageStore(out_radiance, px, vec4(cover * (reflected + imageLoad(in_specular, px).rgb + through) + behind, 1.0));
+    float reflected_at = hits > 0.0 ? dist_sum / hits : 0.0;
+    imageStore(out_hit_distance, px, vec4(history_distance(cover * reflected, reflected_at, let_through, let_through_at)));
 }

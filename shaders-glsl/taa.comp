@@ -8,7 +8,10 @@
 // every silhouette, where the jitter alternates between two surfaces, and nothing would be
 // anti-aliased.) On a metal with a narrow lobe, whose colour is all reflection, the history is
 // fetched where the reflected object was (common/reflection_motion.glsl), as the specular
-// chain's SVGF history is; the disocclusion test still asks about the surface.
+// chain's SVGF history is, and on glass or a blended surface, whose colour is partly what
+// lies behind them, where whichever of the reflected and the let-through light is the larger
+// was (reflections.hit_distance says which), for its share of the colour; the disocclusion
+// test still asks about the surface.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
@@ -25,7 +28,9 @@ layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_depth;
 layout(set = 1, binding = 5, rgba8) uniform readonly image2D g_metal_rough;
 // reflections.hit_distance (a zero image when the frame traces no reflection rays).
 layout(set = 1, binding = 6, r32f) uniform readonly image2D in_hit_distance;
-layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 7, rgba16f) uniform readonly image2D g_base_color;
+layout(set = 1, binding = 8, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 9, rgba32f) uniform writeonly image2D out_color;
 
 // Motion vectors differing by more than this many pixels belong to different surfaces.
 #define DISOCCLUSION_MOTION 0.5
@@ -96,11 +101,24 @@ void main() {
         vec2 prev_surface_motion = imageLoad(prev_motion, ivec2(floor(prev_pos))).xy;
         valid = length(prev_surface_motion - motion) <= DISOCCLUSION_MOTION;
     }
-    vec2 metal_rough = imageLoad(g_metal_rough, px).xy;
+    vec4 metal_rough = imageLoad(g_metal_rough, px);
     float hit = imageLoad(in_hit_distance, px).r;
-    float mirror = metal_rough.x * reflection_motion_weight(metal_rough.y);
-    if (valid && hit > 0.0 && mirror > 0.0) {
-        vec2 reflected = mix(prev_pos, reflection_prev_pos(px, imageLoad(g_depth, px).r, hit), mirror);
+    // The share of the colour that the history follows away from the surface: what a narrow
+    // lobe reflects (the metal's, or the glass's where its reflection is the larger: positive
+    // hit distances), or what the surface lets through (negative: the glass's transmitted
+    // share, a blended surface's uncovered one, whatever the roughness).
+    float glass = metal_rough.w * (1.0 - metal_rough.x);
+    float mirror;
+    if (hit < 0.0) {
+        uvec2 ids = imageLoad(g_ids, px).xy;  // instance, material
+        bool blended = ids.x != NO_INSTANCE && (materials[ids.y].flags & MATERIAL_BLEND) != 0u;
+        float cover = blended ? imageLoad(g_base_color, px).a : 1.0;
+        mirror = (1.0 - cover) + cover * glass;
+    } else {
+        mirror = max(metal_rough.x, glass) * reflection_motion_weight(metal_rough.y);
+    }
+    if (valid && hit != 0.0 && mirror > 0.0) {
+        vec2 reflected = mix(prev_pos, reflection_prev_pos(px, imageLoad(g_depth, px).r, abs(hit)), mirror);
         if (all(greaterThanEqual(reflected, vec2(0.0))) && all(lessThan(reflected, vec2(frame.size)))) prev_pos = reflected;
     }
     vec3 result = cur;

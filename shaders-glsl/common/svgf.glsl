@@ -78,6 +78,12 @@ bool svgf_converged(vec4 c, float history_length) {
 // all of it at 0.35).
 float svgf_footprint(float roughness) { return smoothstep(0.05, 0.35, roughness); }
 
+// The roughness the specular chain treats a pixel's signal by, given reflections.hit_distance:
+// the surface's, but where what the surface lets through carries the signal (a negative
+// distance), none: seen straight through thin glass or past a blended surface, it is as sharp
+// as what a mirror reflects, however rough the surface.
+float svgf_lobe_roughness(float roughness, float hit) { return hit < 0.0 ? 0.0 : roughness; }
+
 // A filtered signal's texel (svgf_temporal's colour, every a-trous iteration's; rgba16f): the
 // colour in rgb, the standard deviation of its luminance in alpha. Half precision because the
 // filter is bound by its loads (8 taps per pixel and signal, each iteration): on lavapipe it cuts

@@ -39,8 +39,10 @@ layout(set = 1, binding = 3, r32f) uniform readonly image2D in_specular_history_
 layout(set = 1, binding = 4, rgba32f) uniform readonly image2D in_guide;
 layout(set = 1, binding = 5, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 layout(set = 1, binding = 6, rgba8) uniform readonly image2D g_metal_rough;
-layout(set = 1, binding = 7, rgba16f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D out_specular;
+// reflections.hit_distance (a zero image without SVGF_SHARP_SPECULAR): svgf_lobe_roughness.
+layout(set = 1, binding = 7, r32f) uniform readonly image2D in_hit_distance;
+layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 9, rgba16f) uniform writeonly image2D out_specular;
 
 vec4 load_signal(int s, ivec2 q) {
     return svgf_unpack(s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q));
@@ -105,7 +107,10 @@ void main() {
     float footprint[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) footprint[s] = 1.0;
 #ifdef SVGF_PAIR
-    if ((svgf.flags & SVGF_SHARP_SPECULAR) != 0u) footprint[1] = svgf_footprint(imageLoad(g_metal_rough, px).y);
+    if ((svgf.flags & SVGF_SHARP_SPECULAR) != 0u) {
+        float hit = imageLoad(in_hit_distance, px).r;
+        footprint[1] = svgf_footprint(svgf_lobe_roughness(imageLoad(g_metal_rough, px).y, hit));
+    }
 #endif
     // Iterations after the first (which feeds the history) leave converged signals as they are:
     // no footprint keeps the centre alone. Without any signal left to filter, no taps at all.

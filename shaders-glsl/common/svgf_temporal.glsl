@@ -31,7 +31,9 @@
 // behind a mirror, and a moving camera sees it move with that point's parallax, not the
 // surface's. The lobe's width decides between the two (roughness), and caps the history: a
 // glossy reflection changes with the view even where the reprojection is right. (The same
-// width narrows the a-trous filter's footprint: svgf_footprint.)
+// width narrows the a-trous filter's footprint: svgf_footprint.) Where what the surface lets
+// through carries more light (thin glass, a blended surface), the history is fetched where
+// that was, on the view ray's line, whatever the roughness.
 #ifndef SVGF_TEMPORAL_GLSL
 #define SVGF_TEMPORAL_GLSL
 
@@ -65,8 +67,8 @@ layout(set = 1, binding = 12, rg32f) uniform readonly image2D prev_diffuse_momen
 layout(set = 1, binding = 13, rg32f) uniform readonly image2D prev_specular_moments;
 layout(set = 1, binding = 14, r32f) uniform readonly image2D prev_diffuse_history_length;
 layout(set = 1, binding = 15, r32f) uniform readonly image2D prev_specular_history_length;
-// reflections.hit_distance: mean distance to what the reflection rays hit (0: none traced; a
-// zero image without SVGF_SHARP_SPECULAR).
+// reflections.hit_distance: mean distance to what the reflection rays hit, negated for what the
+// surface lets through (0: none traced; a zero image without SVGF_SHARP_SPECULAR).
 layout(set = 1, binding = 16, r32f) uniform readonly image2D in_hit_distance;
 layout(set = 1, binding = 17, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 18, rgba16f) uniform writeonly image2D out_diffuse;
@@ -366,11 +368,11 @@ void main() {
     }
 #ifdef SVGF_PAIR
     if ((svgf.flags & SVGF_SHARP_SPECULAR) != 0u) {
-        float roughness = imageLoad(g_metal_rough, px).y;
         float hit = imageLoad(in_hit_distance, px).r;
+        float roughness = svgf_lobe_roughness(imageLoad(g_metal_rough, px).y, hit);
         float virtual_weight = reflection_motion_weight(roughness);
-        if (hit > 0.0 && virtual_weight > 0.0) {
-            prev_pos[1] = mix(surface_pos, reflection_prev_pos(px, z, hit), virtual_weight);
+        if (hit != 0.0 && virtual_weight > 0.0) {
+            prev_pos[1] = mix(surface_pos, reflection_prev_pos(px, z, abs(hit)), virtual_weight);
             // The depth test's tolerance: fetched away from the surface's own motion (the
             // virtual point's), the previous sample is on the same surface a few pixels off,
             // where depth differs by about fwidth per pixel.

@@ -43,6 +43,8 @@ pub fn new(b: &PassBuilder, input: Resource, reflections: bool) -> Result<Fullsc
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::METAL_ROUGH),
         if reflections { hit_distance } else { hit_distance.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },
+        Input::texel(gbuffer::BASE_COLOR),
+        Input::texel(gbuffer::IDS),
     ];
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
     FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, &Params { blend: BLEND, fast_motion: FAST_MOTION })

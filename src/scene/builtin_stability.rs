@@ -11,10 +11,12 @@
 //! | `stability-grazing` | shadow acne on a floor lit at a grazing angle, shadow terminator |
 //! | `stability-firefly` | fireflies from a tiny, very bright emitter |
 //! | `stability-mirror` | a mirror's reflection while the camera moves sideways over it |
+//! | `stability-glass` | what a glass pane shows while the camera moves sideways past it |
+//! | `stability-blend` | the same past a blended (alpha 0.3) pane |
 
 use super::animation::{Channel, Interpolation, Property};
 use super::builtin::{cuboid, node, quad, uv_sphere};
-use super::{Animation, Camera, Instance, Light, LightKind, Material, Node, Scene};
+use super::{AlphaMode, Animation, Camera, Instance, Light, LightKind, Material, Node, Scene};
 use glam::{Mat4, Quat, Vec3, Vec4};
 
 /// Names accepted after `builtin:` for the scenes of this file.
@@ -26,6 +28,8 @@ pub const NAMES: &[&str] = &[
     "stability-grazing",
     "stability-firefly",
     "stability-mirror",
+    "stability-glass",
+    "stability-blend",
 ];
 
 /// The scene called `name`, if it is one of [`NAMES`].
@@ -38,6 +42,8 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-grazing" => Some(grazing()),
         "stability-firefly" => Some(firefly()),
         "stability-mirror" => Some(mirror()),
+        "stability-glass" => Some(glass()),
+        "stability-blend" => Some(blend()),
         _ => None,
     }
 }
@@ -482,9 +488,16 @@ pub fn mirror() -> Scene {
     });
     add(&mut s, "wall", quad(Vec3::new(0.0, 2.0, -4.0), Vec3::X * 16.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
     add(&mut s, "floor", quad(Vec3::new(0.0, -1.0, 0.0), Vec3::Z * 12.0, Vec3::X * 16.0, 1), Vec3::ZERO);
-    let from = Vec3::new(-TRUCK, 0.5, 2.0);
+    sunlit_truck(&mut s, Vec3::new(-TRUCK, 0.5, 2.0), Vec3::new(0.0, -1.2, -2.5));
+    s
+}
+
+/// The sun of the truck scenes and their `truck` camera, which starts at `from` looking along
+/// `towards` and moves to x = +TRUCK between TRUCK_START and TRUCK_END (mirror_facts).
+fn sunlit_truck(s: &mut Scene, from: Vec3, towards: Vec3) {
+    use mirror_facts::*;
     let truck = s.nodes.len() as u32;
-    s.nodes.push(looking("truck", from, from + Vec3::new(0.0, -1.2, -2.5)));
+    s.nodes.push(looking("truck", from, from + towards));
     s.cameras.push(camera("truck", 0.9, truck));
     let sun = s.nodes.len() as u32;
     s.nodes.push(looking("sun", Vec3::ZERO, Vec3::new(0.2, -0.4, -1.0)));
@@ -500,5 +513,55 @@ pub fn mirror() -> Scene {
             values: vec![from.extend(0.0), from.extend(0.0), to.extend(0.0), to.extend(0.0)],
         }],
     });
+}
+
+/// Names and numbers of `stability-glass` and `stability-blend` the scenarios use.
+pub mod glass_facts {
+    /// The pane's instance (after the wall's).
+    pub const PANE_INSTANCE: u32 = 1;
+    /// The `truck` camera moves as `stability-mirror`'s does.
+    pub use super::mirror_facts::{TRUCK, TRUCK_END, TRUCK_START};
+}
+
+/// A thin-walled glass pane (KHR_materials_transmission, roughness 0) 2 in front of the `truck`
+/// camera, and behind it, 6.5 away, a sunlit checkerboard wall: as the camera moves sideways,
+/// what the pane shows (the wall, seen through it) crosses the screen at the wall's speed, not
+/// the pane's.
+pub fn glass() -> Scene {
+    let pane = Material {
+        name: "glass".into(),
+        base_color_factor: Vec4::ONE,
+        metallic_factor: 0.0,
+        roughness_factor: 0.0,
+        transmission: 1.0,
+        ..Default::default()
+    };
+    pane_before_wall("builtin:stability-glass", pane)
+}
+
+/// As `stability-glass`, with a rough blended pane (alpha 0.3) in the glass's place: 70% of
+/// what it shows lies behind it.
+pub fn blend() -> Scene {
+    let pane = Material {
+        name: "veil".into(),
+        base_color_factor: Vec4::new(0.9, 0.9, 0.9, 0.3),
+        metallic_factor: 0.0,
+        roughness_factor: 0.6,
+        alpha_mode: AlphaMode::Blend,
+        ..Default::default()
+    };
+    pane_before_wall("builtin:stability-blend", pane)
+}
+
+/// The glass and blend scenes: a checkerboard wall, the `pane` in front of it, the truck camera.
+fn pane_before_wall(name: &str, pane: Material) -> Scene {
+    use glass_facts::*;
+    let mut s = Scene { name: name.into(), ..Default::default() };
+    let wall = checker_wall(&mut s, glam::Vec2::new(2.0, 0.75));
+    s.materials.push(wall);
+    s.materials.push(pane);
+    add(&mut s, "wall", quad(Vec3::new(0.0, 2.0, -4.0), Vec3::X * 16.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
+    add(&mut s, "pane", quad(Vec3::new(0.0, 0.5, 0.5), Vec3::X * 2.0, Vec3::Y * 1.5, 1), Vec3::ZERO);
+    sunlit_truck(&mut s, Vec3::new(-TRUCK, 0.5, 2.5), Vec3::NEG_Z);
     s
 }

@@ -5,10 +5,12 @@
 //! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
 use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, guide, iteration, temporal};
-use crate::graph::{Output, OutputDesc, Preview};
+use crate::gpu::vk;
+use crate::graph::{self, Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
 use crate::passes::gbuffer;
+use crate::passes::reflections;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_atrous";
@@ -45,6 +47,7 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
     } else {
         (DIFFUSE.of(iteration(PAIR, i - 1)), SPECULAR.of(iteration(PAIR, i - 1)))
     };
+    let hit = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
     let inputs = vec![
         Input::texel(diffuse).bound_as("in_diffuse"),
         Input::texel(specular).bound_as("in_specular"),
@@ -53,6 +56,7 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
         Input::texel(guide::GUIDE),
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::METAL_ROUGH),
+        if sharp_specular { hit } else { hit.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },
     ];
     let run = iteration(PAIR, i);
     let outputs = vec![
