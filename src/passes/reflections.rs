@@ -14,7 +14,10 @@ use bytemuck::{Pod, Zeroable};
 pub const NAME: &str = "reflections";
 /// The specular lobe's contribution (Fresnel and shadowing included).
 pub const RADIANCE: Output = Output::new(NAME, "radiance");
-/// Distance to the reflected hit.
+/// Where the specular signal's history is, along the view ray beyond the surface: the
+/// reflection's mean hit distance (positive), the distance to what the surface lets through
+/// where that is brighter (negative: thin glass, a blended surface; the capture's preview shows
+/// it black), or 0 (the surface itself).
 pub const HIT_DISTANCE: Output = Output::new(NAME, "hit_distance");
 
 /// reflections.comp's push-constant block.
