@@ -64,11 +64,14 @@ vec3 shade_hit(Hit h, HitSurface s, vec3 dir, float emission_weight, inout Rng r
 // Inside a volume the interface reflects or lets the path out (Beer-Lambert absorbing on the
 // way); a further transmissive surface adds what it reflects and is passed through. The weight
 // excludes the surface's transmitted share, which the caller applies.
-// `seen_at`: for thin-walled glass, how far along the view ray the path went before it stopped
-// at an opaque surface (thin glass does not bend a ray: what is seen through it is there, on
-// the view ray's line), which the denoiser and TAA reproject what the glass lets through by;
-// 0 where the path escaped, or entered a volume, whose refraction bends it off that line.
+// `seen_at`: how far the path went before it stopped at an opaque surface, where what it saw
+// lies (near enough) on the view ray's line: through thin-walled glass, which does not bend a
+// ray, or out of a volume in the direction it went in (a slab shifts the line a little and
+// does not turn it). The denoiser and TAA reproject what the glass lets through by it. 0 where
+// the path escaped, or left a volume turned (a lens: what it shows moves its own way).
 #define TRANSMISSION_EVENTS 8u
+// A path leaving a volume within about 2.5 degrees of the view ray counts as not turned.
+#define UNTURNED_COS 0.999
 // Up to this many punctual lights, each is sampled through thin-walled glass.
 #define GLASS_LIGHTS 8u
 vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInput m, MaterialInfo mi, inout Rng rng,
@@ -99,7 +102,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
         }
     }
     if (dot(weight, weight) <= 0.0) return emitted;
-    float travelled = 0.0;  // along a straight line (thin glass only)
+    float travelled = 0.0;  // the path's length from p
     for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
         Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
         if (h.instance == NO_HIT) return emitted + weight * env_eval(dir);
@@ -118,7 +121,7 @@ vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInpu
             emitted += weight * s.mat.emissive;
         }
         if (through <= 0.0) {
-            seen_at = thin ? travelled : 0.0;
+            seen_at = thin || dot(dir, -v) > UNTURNED_COS ? travelled : 0.0;
             return emitted;
         }
         BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));

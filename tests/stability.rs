@@ -138,6 +138,21 @@ fn blend_pan() {
     eprintln!("blend pan: denoised {d:.4}, raw {r:.4}");
 }
 
+/// Metric: as the glass pan's, past a slab of glass 0.2 thick (a volume, `stability-slab`).
+/// Measured at 48x48: during the pan denoised 0.262, raw 0.092 (2.85x); 0.395 (4.3x) while
+/// the slab's history followed the slab: a path that leaves the volume in the direction it
+/// went in now reports how far it went, as through thin glass. Before the pan the denoised
+/// slab is further from the reference than the raw one (0.163 against 0.074, the same before
+/// this change): not the reprojection, a bias of the still filters on the slab not yet found.
+/// Bounds 0.2 and 0.32 denoised, 0.1 and 0.12 raw, and denoised within 3.5x raw in motion.
+#[test]
+fn slab_pan() {
+    let (denoised, raw) = run("slab pan", stability::slab_pan);
+    let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
+    eprintln!("slab pan: denoised {d:.4}, raw {r:.4} ({:.2}x)", d / r);
+    assert!(d <= 3.5 * r, "the slab's history ghosts: during the pan denoised {d:.4} is {:.2}x raw {r:.4}", d / r);
+}
+
 /// Metrics: the fraction of the background's light missing in the cube's 3-frame trail
 /// (ghosting), and the relative error of pixels in their first frame uncovered
 /// (disocclusion). Measured: ghosting denoised 0.020, raw 0.028 (the raw value is the cube's

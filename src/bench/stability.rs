@@ -97,6 +97,7 @@ pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
     ("mirror pan", mirror_pan),
     ("glass pan", glass_pan),
     ("blend pan", blend_pan),
+    ("slab pan", slab_pan),
     ("moving object", moving_object),
     ("moving light", moving_light),
     ("light off", light_off),
@@ -323,6 +324,13 @@ pub fn glass_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
 pub fn blend_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     let bounds = if denoised { [0.1, 0.15] } else { [0.01, 0.01] };
     truck_past(rig, denoised, scenes::blend(), glass_facts::PANE_INSTANCE, PANE_METRICS, bounds)
+}
+
+/// **Slab pan**: as the glass pan, past a slab of glass 0.2 thick (a volume) in
+/// `stability-slab`.
+pub fn slab_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    let bounds = if denoised { [0.2, 0.32] } else { [0.1, 0.12] };
+    truck_past(rig, denoised, scenes::slab(), glass_facts::PANE_INSTANCE, PANE_METRICS, bounds)
 }
 
 const FLOOR_METRICS: [&str; 2] = ["before the pan: floor rel. error", "during the pan: floor rel. error"];

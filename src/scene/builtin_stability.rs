@@ -13,6 +13,7 @@
 //! | `stability-mirror` | a mirror's reflection while the camera moves sideways over it |
 //! | `stability-glass` | what a glass pane shows while the camera moves sideways past it |
 //! | `stability-blend` | the same past a blended (alpha 0.3) pane |
+//! | `stability-slab` | the same past a slab of glass (a volume) |
 
 use super::animation::{Channel, Interpolation, Property};
 use super::builtin::{cuboid, node, quad, uv_sphere};
@@ -30,6 +31,7 @@ pub const NAMES: &[&str] = &[
     "stability-mirror",
     "stability-glass",
     "stability-blend",
+    "stability-slab",
 ];
 
 /// The scene called `name`, if it is one of [`NAMES`].
@@ -44,6 +46,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-mirror" => Some(mirror()),
         "stability-glass" => Some(glass()),
         "stability-blend" => Some(blend()),
+        "stability-slab" => Some(slab()),
         _ => None,
     }
 }
@@ -536,7 +539,7 @@ pub fn glass() -> Scene {
         transmission: 1.0,
         ..Default::default()
     };
-    pane_before_wall("builtin:stability-glass", pane)
+    pane_before_wall("builtin:stability-glass", pane, thin_pane())
 }
 
 /// As `stability-glass`, with a rough blended pane (alpha 0.3) in the glass's place: 70% of
@@ -550,18 +553,40 @@ pub fn blend() -> Scene {
         alpha_mode: AlphaMode::Blend,
         ..Default::default()
     };
-    pane_before_wall("builtin:stability-blend", pane)
+    pane_before_wall("builtin:stability-blend", pane, thin_pane())
 }
 
-/// The glass and blend scenes: a checkerboard wall, the `pane` in front of it, the truck camera.
-fn pane_before_wall(name: &str, pane: Material) -> Scene {
+/// As `stability-glass`, with a slab of glass 0.2 thick (a volume, IOR 1.5) in the pane's
+/// place: the wall seen through it is refracted twice, shifted sideways but not turned.
+pub fn slab() -> Scene {
+    let pane = Material {
+        name: "slab".into(),
+        base_color_factor: Vec4::ONE,
+        metallic_factor: 0.0,
+        roughness_factor: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        thickness: 0.2,
+        ..Default::default()
+    };
+    pane_before_wall("builtin:stability-slab", pane, cuboid(Vec3::new(1.0, 0.75, 0.1), 1))
+}
+
+/// The glass and blend scenes' pane: 2 x 1.5, facing the camera.
+fn thin_pane() -> super::Mesh {
+    quad(Vec3::ZERO, Vec3::X * 2.0, Vec3::Y * 1.5, 1)
+}
+
+/// The glass, blend and slab scenes: a checkerboard wall, the `pane` (`mesh` of `material`)
+/// in front of it, the truck camera.
+fn pane_before_wall(name: &str, material: Material, mesh: super::Mesh) -> Scene {
     use glass_facts::*;
     let mut s = Scene { name: name.into(), ..Default::default() };
     let wall = checker_wall(&mut s, glam::Vec2::new(2.0, 0.75));
     s.materials.push(wall);
-    s.materials.push(pane);
+    s.materials.push(material);
     add(&mut s, "wall", quad(Vec3::new(0.0, 2.0, -4.0), Vec3::X * 16.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
-    add(&mut s, "pane", quad(Vec3::new(0.0, 0.5, 0.5), Vec3::X * 2.0, Vec3::Y * 1.5, 1), Vec3::ZERO);
+    add(&mut s, "pane", mesh, Vec3::new(0.0, 0.5, 0.5));
     sunlit_truck(&mut s, Vec3::new(-TRUCK, 0.5, 2.5), Vec3::NEG_Z);
     s
 }
