@@ -227,8 +227,9 @@ void main() {
         if (cover < 1.0) behind = (1.0 - cover) * behind_blend(p, ng, v, depth, rng, behind_at);
     }
     // What the pixel shows through the surface: behind a blend, else through the glass.
-    vec3 let_through = luminance(behind) >= luminance(cover * through) ? behind : cover * through;
-    float let_through_at = luminance(behind) >= luminance(cover * through) ? behind_at : seen_at;
+    bool behind_wins = luminance(behind) >= luminance(cover * through);
+    vec3 let_through = behind_wins ? behind : cover * through;
+    float let_through_at = behind_wins ? behind_at : seen_at;
 
     if (m.roughness > params.roughness_cutoff) {
         imageStore(out_radiance, px, vec4(cover * (imageLoad(in_specular, px).rgb + through) + behind, 1.0));

@@ -518,7 +518,8 @@ fn sunlit_truck(s: &mut Scene, from: Vec3, towards: Vec3) {
     });
 }
 
-/// Names and numbers of `stability-glass` and `stability-blend` the scenarios use.
+/// Names and numbers of `stability-glass`, `stability-blend` and `stability-slab` the scenarios
+/// use.
 pub mod glass_facts {
     /// The pane's instance (after the wall's).
     pub const PANE_INSTANCE: u32 = 1;
