@@ -168,29 +168,29 @@ fn nan_and_fireflies_stay_out_of_the_history() {
         r.inject(INPUT, texels).unwrap();
         r.render_frame().unwrap();
     }
-    let names = [temporal(svgf::temporal::COLOR), temporal(svgf::temporal::REJECTED), atrous(3)];
+    let names = [temporal(svgf::temporal::COLOR), temporal(svgf::temporal::REJECTED), atrous(0), atrous(3)];
     let imgs = r.read_outputs(&names).unwrap();
     assert_eq!(imgs[1].get_u32(0, 0, 0), 8, "two non-finite samples in each of 4 frames are counted");
-    for img in [&imgs[0], &imgs[2]] {
+    for img in [&imgs[0], &imgs[2], &imgs[3]] {
         let worst = (0..W * H)
             .map(|i| img.get(i % W, i / W, 0))
             .fold(0.0f32, |m, v| if v.is_finite() { m.max(v) } else { f32::INFINITY });
         assert!(worst.is_finite(), "a non-finite value reached the history");
         eprintln!("brightest pixel: {worst}");
-        // Clamped to mean + 4 sigma of a flat neighbourhood, and the 4th frame's light spread
-        // over the 24 pixels around it (an established history's 5x5 window) at that frame's
-        // weight of 1/4: nothing above a 20th of that (0.5 + 500 / 4 / 24 = 5.7; 5.70 measured,
-        // 1.28 after the a-trous iterations), nothing near
-        // the firefly's 500.
-        assert!(worst < base + 0.25 * FIREFLY / 20.0, "a firefly survived: max {worst}");
+        // Clamped to mean + 4 sigma of a flat neighbourhood; the 4th frame's light is handed to
+        // the 8 pixels around it at that frame's weight of 1/4, which the first a-trous
+        // iteration adds: nothing above 0.5 + 500 / 4 / 8 = 16.1 (the later iterations leave
+        // this flat, converged signal as it is), nothing near the firefly's 500.
+        assert!(worst < base + 0.25 * FIREFLY / 7.0, "a firefly survived: max {worst}");
     }
     // The 4th frame's history is established, so the clamp keeps that frame's firefly's light:
-    // its neighbours take it back in even shares, and the frame's weight in the history (1/4)
-    // of it is there, above the base.
-    let excess: f32 = (0..W * H).map(|i| imgs[0].get(i % W, i / W, 0) - base).sum();
+    // its neighbours take it in even shares, and the frame's weight in the history (1/4) of it
+    // is in the first a-trous iteration's output (the next frame's history), above the base.
+    let excess: f32 = (0..W * H).map(|i| imgs[2].get(i % W, i / W, 0) - base).sum();
     let expected = 0.25 * (FIREFLY - base);
     eprintln!("light above the base in the history: {excess:.1}, the 4th firefly's share {expected:.1}");
-    assert!((excess / expected - 1.0).abs() < 0.1, "the clamp lost the firefly's light: {excess} of {expected}");
+    // (124.2 of 124.9 measured: the shares are stored at half precision.)
+    assert!((excess / expected - 1.0).abs() < 0.02, "the clamp lost the firefly's light: {excess} of {expected}");
     drop(r);
     common::assert_validation_clean(ctx);
 }
@@ -343,6 +343,42 @@ fn a_pixel_without_history_takes_its_windows_mean() {
     assert!(dev_out < 0.4 * dev_in, "the window's mean should lower the noise: {dev_in} -> {dev_out}");
     assert!((mean_out / mean_in - 1.0).abs() < 0.01, "the mean moved: {mean_in} -> {mean_out}");
     assert!(brightest <= 1.3, "the sphere (10) spilled onto the plane: {brightest}");
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+/// Rare bright samples that carry a large share of the light, as gi's at full rate (6% of
+/// the pixels holding a quarter of the light, measured at 256x256 on the diffuse box): the
+/// outlier clamp takes many of them, and hands what it takes to their neighbours, so the
+/// history keeps the signal's mean. Measured on the plane after 64 frames: 0.9934 of the
+/// input frames' mean (the history weighs the last frames most, the input's mean all alike:
+/// about 0.5% apart by noise); 0.9701 when each pixel took back a share of its brightest
+/// neighbour's excess only (until 2026-12-04).
+#[test]
+fn the_outlier_clamp_keeps_the_light_of_a_heavy_tail() {
+    let ctx = common::validated_context();
+    let mut r = renderer_with(&ctx, SvgfSettings::default(), 0.0);
+    r.render_frame().unwrap();
+    let ids = r.read_output(passes::gbuffer::IDS).unwrap();
+    let plane: Vec<u32> = (0..W * H).filter(|&i| ids.get_u32(i % W, i / W, 0) == facts::PLANE_INSTANCE).collect();
+    let mut uniform = xorshift(0x1b87_3593);
+    let (mut input_sum, frames) = (0.0f64, 64);
+    for _ in 0..frames {
+        let texels: Vec<[f32; 4]> = (0..W * H)
+            .map(|_| {
+                let v = if uniform() < 0.06 { 4.0 + 4.0 * uniform() } else { 0.5 + uniform() };
+                [v, v, v, 1.0]
+            })
+            .collect();
+        input_sum += plane.iter().map(|&i| texels[i as usize][0] as f64).sum::<f64>() / plane.len() as f64;
+        r.inject(INPUT, texels).unwrap();
+        r.render_frame().unwrap();
+    }
+    let history = r.read_output(atrous(0)).unwrap();
+    let mean = plane.iter().map(|&i| history.get(i % W, i / W, 0) as f64).sum::<f64>() / plane.len() as f64;
+    let ratio = mean / (input_sum / frames as f64);
+    eprintln!("history mean over the plane after {frames} frames: {ratio:.4} of the input's");
+    assert!((ratio - 1.0).abs() < 0.01, "the clamp lost or added light: {ratio:.4} of the input's mean");
     drop(r);
     common::assert_validation_clean(ctx);
 }

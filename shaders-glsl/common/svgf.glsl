@@ -110,6 +110,13 @@ vec4 svgf_pack(vec3 c, float variance) {
 // Texel -> colour and luminance variance.
 vec4 svgf_unpack(vec4 texel) { return vec4(texel.rgb, texel.a * texel.a); }
 
+// svgf_temporal's colour texel: does the pixel give shares of what its outlier clamp took out
+// to its neighbours (svgf_temporal.glsl, the give-back)? Then its deviation is stored negated
+// (and at least SVGF_SHARES_MIN_DEVIATION, so that the sign survives a zero), which
+// svgf_unpack's square leaves out.
+const float SVGF_SHARES_MIN_DEVIATION = 1e-4;
+bool svgf_shares(vec4 texel) { return texel.a < 0.0; }
+
 // What the a-trous weights read of a neighbour, written by svgf_guide into one rgba32f texel so
 // that each of the filter's taps loads one texel instead of three (depth, normal, ids): the
 // shading normal in xyz, the view depth in w, -1 where there is no surface.
@@ -118,5 +125,11 @@ vec4 svgf_guide_pack(float depth, vec3 n, uint instance) {
 }
 
 bool svgf_guide_surface(vec4 guide) { return guide.w >= 0.0; }
+
+// Are the surface pixels with guide texels a and b on one surface, for the outlier clamp's
+// give-back (svgf_temporal, svgf_atrous): shading normals within 25 degrees, view depths within
+// 5% of the nearer. Symmetric, so that the pixel that gives and the neighbours that take count
+// the same neighbours.
+bool svgf_same_surface(vec4 a, vec4 b) { return dot(a.xyz, b.xyz) > 0.9 && abs(a.w - b.w) < 0.05 * min(a.w, b.w); }
 
 #endif

@@ -41,15 +41,20 @@ layout(set = 1, binding = 5, rg32f) uniform readonly image2D g_depth;  // view d
 layout(set = 1, binding = 6, rgba8) uniform readonly image2D g_metal_rough;
 // reflections.hit_distance (a zero image without SVGF_SHARP_SPECULAR): svgf_lobe_roughness.
 layout(set = 1, binding = 7, r32f) uniform readonly image2D in_hit_distance;
-layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 9, rgba16f) uniform writeonly image2D out_specular;
+// svgf_temporal's give-back (read at step 1 only, where svgf_shares; a 1x1 zero image after).
+layout(set = 1, binding = 8, rgba16f) uniform readonly image2D in_diffuse_clamped;
+layout(set = 1, binding = 9, rgba16f) uniform readonly image2D in_specular_clamped;
+layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 11, rgba16f) uniform writeonly image2D out_specular;
 
-vec4 load_signal(int s, ivec2 q) {
-    return svgf_unpack(s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q));
-}
+vec4 load_texel(int s, ivec2 q) { return s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q); }
 
 float load_history_length(int s, ivec2 q) {
     return (s == 0 ? imageLoad(in_diffuse_history_length, q) : imageLoad(in_specular_history_length, q)).r;
+}
+
+vec3 load_clamped(int s, ivec2 q) {
+    return (s == 0 ? imageLoad(in_diffuse_clamped, q) : imageLoad(in_specular_clamped, q)).rgb;
 }
 
 void store_signal(int s, ivec2 q, vec4 v) {
@@ -62,13 +67,18 @@ layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, r32f) uniform readonly image2D in_history_length;
 layout(set = 1, binding = 2, rgba32f) uniform readonly image2D in_guide;
 layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 4, rgba16f) uniform writeonly image2D out_color;
+// svgf_temporal's give-back (read at step 1 only, where svgf_shares; a 1x1 zero image after).
+layout(set = 1, binding = 4, rgba16f) uniform readonly image2D in_clamped;
+layout(set = 1, binding = 5, rgba16f) uniform writeonly image2D out_color;
 
-vec4 load_signal(int s, ivec2 q) { return svgf_unpack(imageLoad(in_color, q)); }
+vec4 load_texel(int s, ivec2 q) { return imageLoad(in_color, q); }
 float load_history_length(int s, ivec2 q) { return imageLoad(in_history_length, q).r; }
+vec3 load_clamped(int s, ivec2 q) { return imageLoad(in_clamped, q).rgb; }
 
 void store_signal(int s, ivec2 q, vec4 v) { imageStore(out_color, q, svgf_pack(v.rgb, v.a)); }
 #endif
+
+vec4 load_signal(int s, ivec2 q) { return svgf_unpack(load_texel(s, q)); }
 
 // The 3x3 kernel [1/4 1/2 1/4]^2 with holes, as weights relative to the centre's.
 const float KERNEL[2] = float[2](1.0, 0.5);
@@ -132,7 +142,15 @@ void main() {
     float e_geometry[TAPS];
     vec4 c_q[TAPS][SIGNALS];
     float var_sum[SIGNALS], var_wsum = 1.0;  // the prefilter at step 1
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) var_sum[s] = c_p[s].a;
+    // At step 1 the taps are the 8 neighbours, among which svgf_temporal handed out what its
+    // outlier clamp took from each: this pixel takes its shares from those on its surface that
+    // gave any (svgf_shares), and adds them to what it filters (common/svgf_temporal.glsl,
+    // the give-back).
+    vec3 given[SIGNALS];
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        var_sum[s] = c_p[s].a;
+        given[s] = vec3(0.0);
+    }
     [[unroll]] for (int i = 0; i < TAPS; ++i) {
         int j = i < 4 ? i : i + 1;  // the centre, 4, is not a tap
         ivec2 d = ivec2(j % 3, j / 3) - 1;
@@ -146,9 +164,12 @@ void main() {
             float k = KERNEL[abs(d.x)] * KERNEL[abs(d.y)];
             e_geometry[i] = e - log(k);
             var_wsum += k;
+            bool same = svgf.step == 1 && svgf_same_surface(g, gq);
             [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-                c_q[i][s] = load_signal(s, q);
+                vec4 texel = load_texel(s, q);
+                c_q[i][s] = svgf_unpack(texel);
                 var_sum[s] += k * c_q[i][s].a;
+                if (same && svgf_shares(texel)) given[s] += load_clamped(s, q);
             }
         }
     }
@@ -170,7 +191,7 @@ void main() {
             sum += vec4(w * c_q[i][s].rgb, w * w * c_q[i][s].a);
             wsum += w;
         }
-        store_signal(s, px, vec4(sum.rgb / wsum, sum.a / (wsum * wsum)));
+        store_signal(s, px, vec4(sum.rgb / wsum + given[s], sum.a / (wsum * wsum)));
     }
 }
 

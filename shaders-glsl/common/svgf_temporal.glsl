@@ -3,10 +3,11 @@
 // demodulated signals. The previous frame's filtered colour (the first a-trous iteration,
 // copied by `history`), moments and history length are reprojected through the motion
 // vectors with bilinear taps that each pass the validity test (on screen, same instance,
-// depth, geometric normal); the new frame is blended in with max(alpha, 1/history). The input is cleaned first: NaN/Inf samples are dropped (and
-// counted) and luminance outliers clamped to mean + k sigma of their 7x7 neighbourhood (5x5
-// once the history is established, when the clamp gives back the light it takes out), so
-// neither poisons the history.
+// depth, geometric normal); the new frame is blended in with max(alpha, 1/history). The input
+// is cleaned first: NaN/Inf samples are dropped (and counted) and luminance outliers clamped to
+// mean + k sigma of their 7x7 neighbourhood (5x5 once the history is established, when what
+// the clamp takes out is handed to the neighbours on the pixel's surface: out_*clamped, which
+// the first a-trous iteration adds), so neither poisons the history.
 //
 // A pixel with no history at all takes the edge-aware mean of that 7x7 window (on its own
 // instance) in place of its sample: the a-trous iterations then start from less noise after a
@@ -77,7 +78,9 @@ layout(set = 1, binding = 20, rg32f) uniform writeonly image2D out_diffuse_momen
 layout(set = 1, binding = 21, rg32f) uniform writeonly image2D out_specular_moments;
 layout(set = 1, binding = 22, r32f) uniform writeonly image2D out_diffuse_history_length;
 layout(set = 1, binding = 23, r32f) uniform writeonly image2D out_specular_history_length;
-#define SVGF_OUT_REJECTED 24
+layout(set = 1, binding = 24, rgba16f) uniform writeonly image2D out_diffuse_clamped;
+layout(set = 1, binding = 25, rgba16f) uniform writeonly image2D out_specular_clamped;
+#define SVGF_OUT_REJECTED 26
 
 vec3 load_input(int s, ivec2 q) { return (s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return (s == 0 ? imageLoad(prev_diffuse, q) : imageLoad(prev_specular, q)).rgb; }
@@ -98,6 +101,10 @@ void store(int s, ivec2 q, vec4 color, vec2 moments, float len) {
         imageStore(out_specular_history_length, q, vec4(len));
     }
 }
+void store_clamped(int s, ivec2 q, vec3 share) {
+    if (s == 0) imageStore(out_diffuse_clamped, q, vec4(share, 0.0));
+    else imageStore(out_specular_clamped, q, vec4(share, 0.0));
+}
 #else
 #define SIGNALS 1
 layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_signal;
@@ -107,7 +114,8 @@ layout(set = 1, binding = 11, r32f) uniform readonly image2D prev_history_length
 layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_color;
 layout(set = 1, binding = 13, rg32f) uniform writeonly image2D out_moments;
 layout(set = 1, binding = 14, r32f) uniform writeonly image2D out_history_length;
-#define SVGF_OUT_REJECTED 15
+layout(set = 1, binding = 15, rgba16f) uniform writeonly image2D out_clamped;
+#define SVGF_OUT_REJECTED 16
 
 vec3 load_input(int s, ivec2 q) { return imageLoad(in_signal, q).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return imageLoad(prev_color, q).rgb; }
@@ -118,6 +126,7 @@ void store(int s, ivec2 q, vec4 color, vec2 moments, float len) {
     imageStore(out_moments, q, vec4(moments, 0.0, 0.0));
     imageStore(out_history_length, q, vec4(len));
 }
+void store_clamped(int s, ivec2 q, vec3 share) { imageStore(out_clamped, q, vec4(share, 0.0)); }
 #endif
 // x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
 layout(set = 1, binding = SVGF_OUT_REJECTED, r32ui) uniform uimage2D out_rejected;
@@ -172,7 +181,6 @@ int tile_index(ivec2 d) {
 struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
     float variance;     // the spatial variance estimate (only for a young history)
-    vec3 spread;        // this pixel's share of what the clamp takes out of its neighbours
     vec3 blurred;       // the edge-aware mean of the clamped samples (only without history)
 };
 
@@ -183,15 +191,10 @@ struct Neighbourhood {
 // bound is found first and the window read twice only then) and, with `blur` (no history at
 // all), the edge-aware mean of the clamped samples on this pixel's instance.
 //
-// With an established history the clamp keeps the firefly's energy: each pixel takes an even
-// share of what the clamp takes out of the brightest neighbour on its own surface (normal
-// within 25 degrees, depth within 5%). A firefly's own window never holds it, so its
-// neighbours' bounds leave the window's brightest sample out too: they then bound it as
-// it bounds itself, and what they take back adds up to about what its clamp removed. (Only
-// the brightest: two fireflies in one window are rare, and a per-neighbour account needs the
-// window's luminances kept, which made the pass half as slow again on lavapipe.) Its window
-// is then 5x5: a smaller window clamps more, which cost light when the clamp dropped it, and
-// now costs nothing but makes the pass as fast as it was before the give-back.
+// With an established history the clamp keeps the firefly's energy (the give-back, below), and
+// its bound leaves the window's brightest sample out, so that a bright sample's neighbours do
+// not judge it by a window that holds it. Its window is then 5x5: a smaller window clamps
+// more, which cost light while the clamp dropped what it took, and now only saves time.
 // An established history's bound is this many times wider: it averages what gets past, and
 // one window of one frame's samples is a poor judge of rare bright paths. Measured at 256x256
 // on the diffuse box, the frame after 64 frames held 0.956 of the reference's light with the
@@ -206,20 +209,14 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
                    bool blur[SIGNALS], out Neighbourhood nb[SIGNALS]) {
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
     bool clamped = !isinf(svgf.clamp_sigma);
-    bool any_young = false, any_established = false, any_blur = false;
+    bool any_young = false, any_blur = false;
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-        nb[s] = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0), vec3(0.0));
+        nb[s] = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0));
         any_young = any_young || young[s];
-        any_established = any_established || !young[s];
         any_blur = any_blur || blur[s];
     }
-    float sum[SIGNALS], sum2[SIGNALS], n[SIGNALS], brightest[SIGNALS], n_same[SIGNALS];
-    int brightest_same[SIGNALS];  // the brightest neighbour on this pixel's surface (tile index)
-    float brightest_same_l[SIGNALS];
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-        sum[s] = sum2[s] = n[s] = brightest[s] = n_same[s] = brightest_same_l[s] = 0.0;
-        brightest_same[s] = 0;
-    }
+    float sum[SIGNALS], sum2[SIGNALS], n[SIGNALS], brightest[SIGNALS];
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) sum[s] = sum2[s] = n[s] = brightest[s] = 0.0;
     // A young history's window is 7x7 (its spatial variance needs it), an established one's 5x5.
     int radius = any_young ? 3 : 2;
     for (int dy = -radius; dy <= radius && clamped; ++dy) {
@@ -230,7 +227,6 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
             vec4 gq = tile_guide[t];
             if (!svgf_guide_surface(gq)) continue;
             bool inner = max(abs(dx), abs(dy)) <= 2;
-            bool same = any_established && dot(g.xyz, gq.xyz) > 0.9 && abs(gq.w - g.w) < 0.05 * g.w;
             [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
                 if (young[s] || inner) {
                     float l = tile_luminance[s][t];
@@ -238,28 +234,18 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
                     sum2[s] += l * l;
                     n[s] += 1.0;
                     brightest[s] = max(brightest[s], l);
-                    if (!young[s] && same) {
-                        n_same[s] += 1.0;
-                        if (l > brightest_same_l[s]) {
-                            brightest_same_l[s] = l;
-                            brightest_same[s] = t;
-                        }
-                    }
                 }
             }
         }
     }
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         if (clamped) {
-            bool spread = !young[s];
-            float trim = spread ? brightest[s] : 0.0;
-            float m = max(n[s] - (spread ? 1.0 : 0.0), 1.0);
+            bool established = !young[s];
+            float trim = established ? brightest[s] : 0.0;
+            float m = max(n[s] - (established ? 1.0 : 0.0), 1.0);
             float mean = (sum[s] - trim) / m;
-            float k = spread ? SVGF_ESTABLISHED_SIGMA_SCALE * svgf.clamp_sigma : svgf.clamp_sigma;
+            float k = established ? SVGF_ESTABLISHED_SIGMA_SCALE * svgf.clamp_sigma : svgf.clamp_sigma;
             nb[s].clamp_limit = mean + k * sqrt(max(0.0, (sum2[s] - trim * trim) / m - mean * mean));
-            if (brightest_same_l[s] > nb[s].clamp_limit) {
-                nb[s].spread = tile_sample[s][brightest_same[s]] * (1.0 - nb[s].clamp_limit / brightest_same_l[s]) / n_same[s];
-            }
         }
     }
     if (!any_young) return;
@@ -306,6 +292,36 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
             nb[s].variance = max(0.0, mean.y - mean.x * mean.x);
         }
     }
+}
+
+// The give-back: what the clamp takes out of an established history's sample is handed in even
+// shares to the neighbours on its surface (svgf_same_surface) among the 8 around it, which the
+// first a-trous iteration adds to its output (the colour the next frame's history is made
+// of). Each share is in the history's units, scaled by the weight `a` the sample would have had
+// in it, so the light the history lost is the light its neighbours gain, exactly; a pixel
+// without a neighbour on its surface (a surface a pixel wide) keeps none of it. Until
+// 2026-12-04 each pixel took back a share of the clamped light of the brightest neighbour on
+// its surface, estimated against its own bound: where many pixels pass their bounds (gi at
+// full rate: 6% of the pixels holding a quarter of the light) that returned about half.
+// Spread over 3x3 rather than the 5x5 window, because the a-trous iteration's step-1 taps are
+// those 8 neighbours, already loaded. Only a pixel that gives shares writes them, and says so by
+// the sign of its colour's alpha (svgf_shares), which the a-trous taps load anyway: stored for
+// every pixel and loaded by every tap, the shares made the temporal pass 3-6 ms and the first
+// a-trous iteration 2.5 ms slower at 640x360 on lavapipe. main() computes the clamp and the
+// excess without branches and gives in one branch after both signals: with a branch per
+// signal around the clamp the pass was still about 3 ms slower than without the give-back.
+float same_surface_neighbours(ivec2 px) {
+    vec4 g = tile_guide[tile_index(ivec2(0))];
+    float n = 0.0;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 q = px + ivec2(dx, dy);
+            if ((dx == 0 && dy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
+            vec4 gq = tile_guide[tile_index(ivec2(dx, dy))];
+            if (svgf_guide_surface(gq) && svgf_same_surface(g, gq)) n += 1.0;
+        }
+    }
+    return n;
 }
 
 // A mirror's history is capped at this many frames, rising to svgf.history_cap at roughness
@@ -418,11 +434,17 @@ void main() {
     }
     Neighbourhood nb[SIGNALS];
     neighbourhood(px, tile_guide[tile_index(ivec2(0))], id, fw, c, young, blur, nb);
+    vec3 excess[SIGNALS];  // what the clamp takes out, where an established history gives it on
+    bool gives = false;
+    vec4 texel[SIGNALS];
+    vec2 moments[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         vec3 cs = c[s];
         float l = luminance(cs);
-        if (l > nb[s].clamp_limit && l > 0.0) cs *= nb[s].clamp_limit / l;
-        cs += nb[s].spread;
+        float kept = l > nb[s].clamp_limit && l > 0.0 ? nb[s].clamp_limit / l : 1.0;
+        excess[s] = young[s] ? vec3(0.0) : cs * ((1.0 - kept) * max(svgf.alpha, 1.0 / len[s]));
+        gives = gives || kept < 1.0 && !young[s];
+        cs *= kept;
         // No history at all (a disocclusion, a camera cut, changed lights): the sample is
         // replaced by the edge-aware mean of its 7x7 window on the same instance, which the
         // variance estimate has weighed anyway, so the a-trous iterations start from less
@@ -430,17 +452,28 @@ void main() {
         // a-trous filter).
         if (blur[s] && finite[s]) cs = mix(cs, nb[s].blurred, footprint[s]);
         l = luminance(cs);
-        vec2 moments = vec2(l, l * l);
+        moments[s] = vec2(l, l * l);
         if (!blur[s]) {
             float a = max(svgf.alpha, 1.0 / len[s]);
             float am = max(svgf.moments_alpha, 1.0 / len[s]);
             // A dropped (non-finite) sample leaves the history as it was.
             cs = finite[s] ? mix(hist_c[s], cs, a) : hist_c[s];
-            moments = finite[s] ? mix(hist_m[s], moments, am) : hist_m[s];
+            moments[s] = finite[s] ? mix(hist_m[s], moments[s], am) : hist_m[s];
         }
-        float variance = young[s] ? nb[s].variance * 4.0 / len[s] : max(0.0, moments.y - moments.x * moments.x);
-        store(s, px, svgf_pack(cs, variance), moments, len[s]);
+        float variance = young[s] ? nb[s].variance * 4.0 / len[s] : max(0.0, moments[s].y - moments[s].x * moments[s].x);
+        texel[s] = svgf_pack(cs, variance);
     }
+    if (gives) {
+        float neighbours = same_surface_neighbours(px);
+        [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+            vec3 share = svgf_nearest_half(vec4(min(excess[s] / neighbours, vec3(SVGF_HALF_MAX)), 0.0)).rgb;
+            if (neighbours > 0.0 && any(greaterThan(share, vec3(0.0)))) {
+                store_clamped(s, px, share);
+                texel[s].a = -max(texel[s].a, SVGF_SHARES_MIN_DEVIATION);
+            }
+        }
+    }
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) store(s, px, texel[s], moments[s], len[s]);
 }
 
 #endif

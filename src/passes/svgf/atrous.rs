@@ -32,6 +32,7 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
         Input::texel(temporal::HISTORY_LENGTH.of(super::signal(signal))),
         Input::texel(guide::GUIDE),
         Input::texel(gbuffer::DEPTH),
+        give_back(temporal::CLAMPED.of(super::signal(signal)), i),
     ];
     let outputs = vec![OutputDesc::storage(COLOR.of(run), COLOR_FORMAT, Preview::Color)];
     let push = s.push_constants(1 << i, 0);
@@ -57,6 +58,8 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::METAL_ROUGH),
         if sharp_specular { hit } else { hit.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },
+        give_back(temporal::DIFFUSE_CLAMPED.of(pair), i),
+        give_back(temporal::SPECULAR_CLAMPED.of(pair), i),
     ];
     let run = iteration(PAIR, i);
     let outputs = vec![
@@ -67,4 +70,12 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
     let push = s.push_constants(1 << i, flags);
     let shader = "svgf_atrous_diffuse_specular.comp";
     FullscreenPass::new(b, &DIFFUSE.of(run).pass_name(), shader, inputs, outputs, &push)
+}
+
+/// svgf_temporal's give-back of a signal, which iteration 0 (step 1, whose taps are the 8
+/// neighbours it was handed to) adds; the later iterations read nothing there (a 1x1 zero
+/// image).
+fn give_back(clamped: Output, i: u32) -> Input {
+    let input = Input::texel(clamped);
+    if i == 0 { input } else { input.reading(graph::zero(COLOR_FORMAT, true)) }
 }

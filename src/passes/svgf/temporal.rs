@@ -25,6 +25,10 @@ pub const COLOR: Output = Output::new(NAME, "color");
 pub const MOMENTS: Output = Output::new(NAME, "moments");
 /// A lone signal's frames accumulated.
 pub const HISTORY_LENGTH: Output = Output::new(NAME, "history_length");
+/// A lone signal's give-back: what the outlier clamp took out of the pixel's sample, weighed
+/// as the history would have weighed it, divided among the neighbours on its surface (each
+/// share; the first a-trous iteration adds the shares of its neighbours).
+pub const CLAMPED: Output = Output::new(NAME, "clamped");
 /// The pair's accumulated diffuse colour, as `COLOR` (`DIFFUSE.of(svgf::signal(PAIR))`).
 pub const DIFFUSE: Output = Output::new(NAME, "diffuse");
 /// The pair's accumulated specular colour, as `COLOR`.
@@ -33,6 +37,9 @@ pub const DIFFUSE_MOMENTS: Output = Output::new(NAME, "diffuse_moments");
 pub const SPECULAR_MOMENTS: Output = Output::new(NAME, "specular_moments");
 pub const DIFFUSE_HISTORY_LENGTH: Output = Output::new(NAME, "diffuse_history_length");
 pub const SPECULAR_HISTORY_LENGTH: Output = Output::new(NAME, "specular_history_length");
+/// The pair's give-back of each signal, as `CLAMPED`.
+pub const DIFFUSE_CLAMPED: Output = Output::new(NAME, "diffuse_clamped");
+pub const SPECULAR_CLAMPED: Output = Output::new(NAME, "specular_clamped");
 /// Non-finite input samples caught since the first frame (texel 0,0), of every signal.
 pub const REJECTED: Output = Output::new(NAME, "rejected");
 
@@ -49,6 +56,8 @@ struct Signal {
     filtered: Output,
     /// Colour, moments, history length.
     outputs: [Output; 3],
+    /// The give-back (`CLAMPED`).
+    clamped: Output,
 }
 
 impl Signal {
@@ -94,6 +103,7 @@ fn pass(
     for (k, (format, preview)) in FORMATS.into_iter().zip(PREVIEWS).enumerate() {
         outputs.extend(signals.iter().map(|x| OutputDesc::storage(x.outputs[k], format, preview)));
     }
+    outputs.extend(signals.iter().map(|x| OutputDesc::storage(x.clamped, COLOR_FORMAT, Preview::Color)));
     outputs.push(OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1));
     let push = s.push_constants(0, flags);
     FullscreenPass::new(b, &REJECTED.of(run).pass_name(), shader, inputs, outputs, &push)
@@ -113,6 +123,7 @@ pub fn single(
         input: Input::texel(input).bound_as("in_signal"),
         filtered,
         outputs: [COLOR.of(run), MOMENTS.of(run), HISTORY_LENGTH.of(run)],
+        clamped: CLAMPED.of(run),
     };
     pass(b, run, "svgf_temporal.comp", &[one], Vec::new(), s, 0)
 }
@@ -134,11 +145,13 @@ pub fn pair(
             input: Input::texel(diffuse).bound_as("in_diffuse"),
             filtered: filtered[0],
             outputs: [DIFFUSE.of(run), DIFFUSE_MOMENTS.of(run), DIFFUSE_HISTORY_LENGTH.of(run)],
+            clamped: DIFFUSE_CLAMPED.of(run),
         },
         Signal {
             input: Input::texel(specular).bound_as("in_specular"),
             filtered: filtered[1],
             outputs: [SPECULAR.of(run), SPECULAR_MOMENTS.of(run), SPECULAR_HISTORY_LENGTH.of(run)],
+            clamped: SPECULAR_CLAMPED.of(run),
         },
     ];
     let hit = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
