@@ -110,12 +110,15 @@ vec4 svgf_pack(vec3 c, float variance) {
 // Texel -> colour and luminance variance.
 vec4 svgf_unpack(vec4 texel) { return vec4(texel.rgb, texel.a * texel.a); }
 
-// svgf_temporal's colour texel: does the pixel give shares of what its outlier clamp took out
-// to its neighbours (svgf_temporal.glsl, the give-back)? Then its deviation is stored negated
-// (and at least SVGF_SHARES_MIN_DEVIATION, so that the sign survives a zero), which
-// svgf_unpack's square leaves out.
-const float SVGF_SHARES_MIN_DEVIATION = 1e-4;
-bool svgf_shares(vec4 texel) { return texel.a < 0.0; }
+// A flag on a pixel, carried by a filtered signal's texel as the sign of its deviation (at
+// least SVGF_FLAG_MIN_DEVIATION, so that the sign survives a zero), which svgf_unpack's square
+// leaves out, and which the a-trous taps load anyway. On svgf_temporal's colour: the pixel gives
+// shares of what its outlier clamp took out to its neighbours (svgf_temporal.glsl, the
+// give-back). On an a-trous iteration's: the pixel's signal has converged (svgf_converged), so
+// the next iteration leaves it as it is and its neighbours leave it out (svgf_atrous.glsl).
+const float SVGF_FLAG_MIN_DEVIATION = 1e-4;
+vec4 svgf_flag(vec4 texel) { return vec4(texel.rgb, -max(texel.a, SVGF_FLAG_MIN_DEVIATION)); }
+bool svgf_flagged(vec4 texel) { return texel.a < 0.0; }
 
 // What the a-trous weights read of a neighbour, written by svgf_guide into one rgba32f texel so
 // that each of the filter's taps loads one texel instead of three (depth, normal, ids): the

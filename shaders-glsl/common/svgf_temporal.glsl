@@ -305,7 +305,7 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
 // full rate: 6% of the pixels holding a quarter of the light) that returned about half.
 // Spread over 3x3 rather than the 5x5 window, because the a-trous iteration's step-1 taps are
 // those 8 neighbours, already loaded. Only a pixel that gives shares writes them, and says so by
-// the sign of its colour's alpha (svgf_shares), which the a-trous taps load anyway: stored for
+// the sign of its colour's alpha (svgf_flag), which the a-trous taps load anyway: stored for
 // every pixel and loaded by every tap, the shares made the temporal pass 3-6 ms and the first
 // a-trous iteration 2.5 ms slower at 640x360 on lavapipe. main() computes the clamp and the
 // excess without branches and gives in one branch after both signals: with a branch per
@@ -469,7 +469,7 @@ void main() {
             vec3 share = svgf_nearest_half(vec4(min(excess[s] / neighbours, vec3(SVGF_HALF_MAX)), 0.0)).rgb;
             if (neighbours > 0.0 && any(greaterThan(share, vec3(0.0)))) {
                 store_clamped(s, px, share);
-                texel[s].a = -max(texel[s].a, SVGF_SHARES_MIN_DEVIATION);
+                texel[s] = svgf_flag(texel[s]);
             }
         }
     }
