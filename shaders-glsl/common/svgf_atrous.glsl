@@ -198,8 +198,8 @@ void main() {
     // A converged tap is left out: it keeps its own value in this iteration, so light that this
     // pixel took from it would not flow back, and a pixel whose noise has not converged is more
     // often one that has just taken a bright sample: with converged taps in, the iterations
-    // after the first lost about 1% of the diffuse box's light (README, "The clamp hands on
-    // exactly what it takes").
+    // after the first lost about 1% of the diffuse box's light (README, "Converged taps are
+    // left out").
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         float l = luminance(c_p[s].rgb);
         float std_dev = sqrt(max(0.0, variance[s]));
