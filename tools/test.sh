@@ -10,7 +10,10 @@
 #
 # Every test binary runs even when one fails (--no-fail-fast); the end of the output lists each
 # failing binary with its failing tests, and the last line totals all of them in the form of
-# cargo's own `test result:` lines. The exit status is non-zero when anything failed.
+# cargo's own `test result:` lines. The exit status is non-zero when anything failed. A binary
+# that died by a signal before reporting (a crash, not a failed test) is run once more, and
+# counts as passed only if that run passes; the last line then names it (tools/test_summary.py
+# says why).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source tools/env.sh
@@ -22,6 +25,13 @@ echo "[test] cargo test --features shader-compiler --no-fail-fast (target folder
 set +e
 cargo test --locked --features shader-compiler --no-fail-fast "$@" 2>&1 | tee "$log"
 cargo_status=${PIPESTATUS[0]}
+reruns=()
+for name in $(python3 tools/test_summary.py "$log" --crashed); do
+    rerun_log=$(mktemp "/tmp/hybrid-rt-test-$name.XXXXXX.log")
+    echo "[test] tests/$name.rs died by a signal: running it once more (log: $rerun_log)"
+    cargo test --locked --features shader-compiler --test "$name" "$@" 2>&1 | tee "$rerun_log"
+    reruns+=(--rerun "$rerun_log")
+done
 echo "[test] tools/check-msrv.sh"
 bash tools/check-msrv.sh
 msrv_status=$?
@@ -30,4 +40,4 @@ set -e
 checks=()
 if [ "$msrv_status" -eq 0 ]; then checks+=(--passed "msrv check"); else checks+=(--failed "msrv check (tools/check-msrv.sh)"); fi
 echo "[test] summary"
-exec python3 tools/test_summary.py "$log" --cargo-status "$cargo_status" "${checks[@]}"
+exec python3 tools/test_summary.py "$log" --cargo-status "$cargo_status" "${checks[@]}" "${reruns[@]}"
