@@ -40,6 +40,15 @@ fn value(measures: &[Measure], prefix: &str) -> f64 {
     measures.iter().find(|m| m.metric.starts_with(prefix)).unwrap_or_else(|| panic!("no metric {prefix}")).value
 }
 
+/// A pan's scenario run as `run` does, and its denoised and raw errors during the pan, printed
+/// with their ratio.
+fn pan(name: &str, scenario: stability::ScenarioFn) -> (Vec<Measure>, Vec<Measure>, f64, f64) {
+    let (denoised, raw) = run(name, scenario);
+    let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
+    eprintln!("{name}: denoised {d:.4}, raw {r:.4} ({:.2}x)", d / r);
+    (denoised, raw, d, r)
+}
+
 /// Metric: relative mean absolute luminance error (sum |Y - Y_ref| / sum Y_ref) against the
 /// new view's reference (8 raw frames), in the first frame after a cut from the sunlit wall to
 /// the floor behind the camera, and over the 8 frames after it. Measured: denoised 0.082 and
@@ -98,9 +107,7 @@ fn fast_pan() {
 /// and 0.15): what is left in motion is the smear of reprojected history.
 #[test]
 fn mirror_pan() {
-    let (denoised, raw) = run("mirror pan", stability::mirror_pan);
-    let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
-    eprintln!("mirror pan: denoised {d:.4}, raw {r:.4} ({:.2}x)", d / r);
+    let (denoised, raw, _, _) = pan("mirror pan", stability::mirror_pan);
     let (ds, rs) = (value(&denoised, "before the pan"), value(&raw, "before the pan"));
     assert!(ds <= rs, "the still mirror's denoised floor is {:.2}x the raw error: {ds:.4} vs {rs:.4}", ds / rs);
 }
@@ -116,9 +123,7 @@ fn mirror_pan() {
 /// denoised within 4x raw, which the ghosting (7x) fails. Before the pan 0.052 and 0.053.
 #[test]
 fn glass_pan() {
-    let (denoised, raw) = run("glass pan", stability::glass_pan);
-    let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
-    eprintln!("glass pan: denoised {d:.4}, raw {r:.4} ({:.2}x)", d / r);
+    let (_, _, d, r) = pan("glass pan", stability::glass_pan);
     assert!(d <= 4.0 * r, "the pane's history ghosts: during the pan denoised {d:.4} is {:.2}x raw {r:.4}", d / r);
 }
 
@@ -133,9 +138,7 @@ fn glass_pan() {
 /// denoised (both of the old errors fail them), 0.01 raw.
 #[test]
 fn blend_pan() {
-    let (denoised, raw) = run("blend pan", stability::blend_pan);
-    let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
-    eprintln!("blend pan: denoised {d:.4}, raw {r:.4}");
+    pan("blend pan", stability::blend_pan);
 }
 
 /// Metric: as the glass pan's, past a slab of glass 0.2 thick (a volume, `stability-slab`).
@@ -149,9 +152,7 @@ fn blend_pan() {
 /// Bounds 0.2 and 0.32 denoised, 0.1 and 0.12 raw, and denoised within 3.5x raw in motion.
 #[test]
 fn slab_pan() {
-    let (denoised, raw) = run("slab pan", stability::slab_pan);
-    let (d, r) = (value(&denoised, "during the pan"), value(&raw, "during the pan"));
-    eprintln!("slab pan: denoised {d:.4}, raw {r:.4} ({:.2}x)", d / r);
+    let (_, _, d, r) = pan("slab pan", stability::slab_pan);
     assert!(d <= 3.5 * r, "the slab's history ghosts: during the pan denoised {d:.4} is {:.2}x raw {r:.4}", d / r);
 }
 
