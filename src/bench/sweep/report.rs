@@ -19,6 +19,28 @@ pub fn path_tracer_flip_at(s: &SceneSweep, ms: f64) -> Option<f64> {
     })
 }
 
+/// Where the reference's own noise (FLIP between its two halves) is at least half the smallest
+/// error the table compares, its noise decides the comparisons as much as the images do: a
+/// smooth frame and a noisy path-traced one both measure the reference's grain. Measured on the
+/// default scene at 256x256: against 256 spp (noise 0.124) the hybrid frame read level with the
+/// path tracer at equal time (1.02x), against 8192 spp (noise 0.043) 0.93x.
+fn reference_noise_note(s: &SceneSweep) -> Option<String> {
+    let noise = s.reference.made.noise_flip;
+    let compared = s
+        .points
+        .iter()
+        .flat_map(|p| [Some(p.flip), path_tracer_flip_at(s, s.frames as f64 * p.frame_ms)])
+        .flatten()
+        .fold(f64::INFINITY, f64::min);
+    (compared.is_finite() && noise >= 0.5 * compared).then(|| {
+        format!(
+            "  note: the reference's own noise (FLIP {noise:.4} between its halves) is at least half the smallest \
+             error compared here ({compared:.4}), so it weighs in every comparison; a reference with more \
+             samples (--reference-spp; one made on a faster device serves through --cache-dir) would resolve them\n"
+        )
+    })
+}
+
 /// A table of a sweep's points for the terminal; `*` marks the Pareto front.
 pub fn table(s: &SceneSweep) -> String {
     let mut t = format!(
@@ -30,7 +52,14 @@ pub fn table(s: &SceneSweep) -> String {
         s.frames,
         s.rounds.max(1),
         s.reference.made.spp,
-        if s.reference.cached { ", cached" } else { "" },
+        match (s.reference.cached, s.reference.made.device != s.device) {
+            // A reference does not depend on the device (the backends agree hit for hit), but
+            // the reader should know where it came from.
+            (true, true) =>
+                format!(", cached, made on {} ({} backend)", s.reference.made.device, s.reference.made.backend),
+            (true, false) => ", cached".to_string(),
+            _ => String::new(),
+        },
         s.reference.made.noise_flip
     );
     t += &format!(
@@ -110,6 +139,9 @@ pub fn table(s: &SceneSweep) -> String {
             }
         }
     }
+    if let Some(note) = reference_noise_note(s) {
+        t += &note;
+    }
     for full in s.points.iter().filter(|p| p.config.full) {
         let planned = Config { full: false, ..full.config };
         if let Some(p) = s.points.iter().find(|p| p.config == planned) {
@@ -154,5 +186,25 @@ mod tests {
         assert!(row.trim_end().ends_with('-'), "{row}");
         assert!(t.contains("after a camera cut: FLIP 0.2000, 0.40x the path tracer's at 1 spp (0.5000)"), "{t}");
         assert!(t.contains("(empty cache too): FLIP 0.2500, 0.50x the path tracer's at 1 spp"), "{t}");
+    }
+
+    #[test]
+    fn a_reference_as_noisy_as_the_errors_is_called_out() {
+        let mut s = sweep(&[("d4-s5-b1-r1", 12.0, 0.1, true)]);
+        assert!(!table(&s).contains("note: the reference's own noise"), "{}", table(&s));
+        s.reference.made.noise_flip = 0.06;
+        let t = table(&s);
+        assert!(t.contains("note: the reference's own noise (FLIP 0.0600 between its halves)"), "{t}");
+        assert!(t.contains("smallest error compared here (0.1000)"), "{t}");
+    }
+
+    #[test]
+    fn a_cached_reference_from_another_device_says_where_it_was_made() {
+        let mut s = sweep(&[("d4-s5-b1-r1", 12.0, 0.1, true)]);
+        s.reference.cached = true;
+        s.reference.made.device = "NVIDIA H200".into();
+        assert!(table(&s).contains("cached, made on NVIDIA H200 (compute backend)"), "{}", table(&s));
+        s.reference.made.device = s.device.clone();
+        assert!(!table(&s).contains("made on"), "{}", table(&s));
     }
 }
