@@ -35,6 +35,8 @@ pub struct FrameCost {
     pub width: u32,
     pub height: u32,
     pub frames: u32,
+    /// Frames rendered before measuring (at least `--warmup`, and on for WARMUP_MIN_SECONDS).
+    pub warmup_frames: u32,
     /// Sum of the passes' profiled wall-clock times.
     pub total_ms: f64,
     /// Sum of the passes' timestamp times.
@@ -48,9 +50,16 @@ pub struct FrameCost {
     pub wall_ms: f64,
 }
 
-/// Renders `warmup + frames` frames of `scene` with `settings` (`bench frame`: the default
-/// frame, TAA and denoiser on, the frame plan unless `--full`), then `frames` more of each
-/// kind, unprofiled and profiled, and takes the medians.
+/// A warm-up lasts at least this long, whatever the number of frames asked for: a GPU raises its
+/// clocks over the first frames. On an NVIDIA H200 the first `bench frame` of a process
+/// measured 640x360 at 12.9 ms a frame after 4 warm-up frames, and the next one, on the warmed
+/// GPU, 3.3 ms; on lavapipe 4 frames take longer than this anyway.
+const WARMUP_MIN_SECONDS: f64 = 1.0;
+
+/// Renders at least `warmup` frames of `scene` with `settings` (`bench frame`: the default
+/// frame, TAA and denoiser on, the frame plan unless `--full`), and on for at least
+/// WARMUP_MIN_SECONDS, then `frames` more of each kind, unprofiled and profiled, and takes the
+/// medians.
 pub fn measure(
     ctx: &Arc<Context>,
     shaders: &ShaderLibrary,
@@ -61,8 +70,11 @@ pub fn measure(
 ) -> Result<FrameCost> {
     let (width, height) = (settings.width, settings.height);
     let mut r = Renderer::new(ctx, shaders, scene, settings, &CameraChoice::Default, backend)?;
-    for _ in 0..warmup {
+    let start = std::time::Instant::now();
+    let mut warmup_frames = 0;
+    while warmup_frames < warmup || start.elapsed().as_secs_f64() < WARMUP_MIN_SECONDS {
         r.render_frame()?;
+        warmup_frames += 1;
     }
     let mut stamps: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut walls: BTreeMap<String, Vec<f64>> = BTreeMap::new();
@@ -95,6 +107,7 @@ pub fn measure(
         width,
         height,
         frames: frames.max(1),
+        warmup_frames,
         total_ms,
         timestamps_ms: passes.iter().map(|(_, _, gpu)| gpu).sum(),
         passes: passes.into_iter().map(|(pass, ms, gpu_ms)| PassCost { pass, ms, share: share(ms), gpu_ms }).collect(),
@@ -138,6 +151,11 @@ pub fn table(costs: &[FrameCost]) -> String {
     s.push_str(&format!("{:<NAME$}", "frame (one submission)"));
     for c in costs {
         s.push_str(&format!(" {:>22} {:>10}", format!("{:.2}", c.wall_ms), ""));
+    }
+    s.push('\n');
+    s.push_str(&format!("{:<NAME$}", "after warm-up frames"));
+    for c in costs {
+        s.push_str(&format!(" {:>22} {:>10}", c.warmup_frames, ""));
     }
     s.push('\n');
     s

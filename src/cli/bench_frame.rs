@@ -21,7 +21,8 @@ pub struct FrameArgs {
     /// Image sizes, WIDTHxHEIGHT, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "640x360,1920x1080")]
     sizes: Vec<String>,
-    /// Frames rendered before measuring (pipeline compilation, histories filling).
+    /// Frames rendered before measuring (pipeline compilation, histories filling, a GPU's
+    /// clocks rising); the warm-up goes on for at least a second whatever this says.
     #[arg(long, default_value_t = 4)]
     warmup: u32,
     /// Frames measured, each unprofiled and profiled; each pass's median is reported.
