@@ -22,6 +22,8 @@
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 #define RC_BINDING 9
+// A mirror shows the cache's answer at its reflection's hit unfiltered: read it blended.
+#define RC_BLEND_FIRST
 #include "common/radiance_cache.glsl"
 #include "common/pass_through.glsl"
 

@@ -25,7 +25,8 @@
 // while it writes this frame's.
 //
 // The includer defines RC_BINDING, the first of the three set-1 bindings the cache takes, and
-// includes trace.glsl, brdf.glsl, light_sampling.glsl and ray_offset.glsl first.
+// includes trace.glsl, brdf.glsl, light_sampling.glsl and ray_offset.glsl first; with
+// RC_BLEND_FIRST (the reflections pass) the first vertex's answer is blended (rc_blend).
 #ifndef RADIANCE_CACHE_GLSL
 #define RADIANCE_CACHE_GLSL
 
@@ -101,11 +102,9 @@ uint rc_normal_bucket(vec3 n) {
     return axis * 2u + (n[axis] < 0.0 ? 1u : 0u);
 }
 
-// Home slot and checksum (never RC_EMPTY) of the cell holding (p, n).
-uvec2 rc_key(vec3 p, vec3 n) {
-    float cell = rc_cell_size(p);
-    ivec3 c = ivec3(floor(p / cell));
-    uint h = rc_hash(floatBitsToUint(cell) ^ rc_normal_bucket(n));
+// Home slot and checksum (never RC_EMPTY) of cell c of size `cell` and normal bucket `bucket`.
+uvec2 rc_cell_key(ivec3 c, float cell, uint bucket) {
+    uint h = rc_hash(floatBitsToUint(cell) ^ bucket);
     h = rc_hash(h ^ uint(c.x));
     h = rc_hash(h ^ uint(c.y));
     h = rc_hash(h ^ uint(c.z));
@@ -113,13 +112,18 @@ uvec2 rc_key(vec3 p, vec3 n) {
     return uvec2(h & (rc.capacity - 1u), check);
 }
 
+// Home slot and checksum of the cell holding (p, n).
+uvec2 rc_key(vec3 p, vec3 n) {
+    float cell = rc_cell_size(p);
+    return rc_cell_key(ivec3(floor(p / cell)), cell, rc_normal_bucket(n));
+}
+
 #define RC_NONE 0xffffffffu
 
-// The slot of the cell holding (p, n), claiming an empty one when `claim`. RC_NONE when absent
-// (or the probes are full). A freed slot is all zeros (the update clears it), which is the
-// state a new cell starts in.
-uint rc_find(vec3 p, vec3 n, bool claim) {
-    uvec2 k = rc_key(p, n);
+// The slot of the cell with key k (rc_key), claiming an empty one when `claim`. RC_NONE when
+// absent (or the probes are full). A freed slot is all zeros (the update clears it), which is
+// the state a new cell starts in.
+uint rc_find_key(uvec2 k, bool claim) {
     for (uint i = 0u; i < RC_PROBES; ++i) {
         uint slot = (k.x + i) & (rc.capacity - 1u);
         uint seen = rc_keys[slot];
@@ -131,6 +135,9 @@ uint rc_find(vec3 p, vec3 n, bool claim) {
     }
     return RC_NONE;
 }
+
+// The slot of the cell holding (p, n) (rc_find_key).
+uint rc_find(vec3 p, vec3 n, bool claim) { return rc_find_key(rc_key(p, n), claim); }
 
 // 12 + 12 bits: the octahedral map of a unit vector.
 uint rc_pack_normal(vec3 n) {
@@ -176,12 +183,59 @@ struct RcCandidate {
     bool empty;  // no answer because the cell holds no light yet (its slot taken, no samples)
 };
 
+// Blending, for queries whose answer a pixel shows unfiltered (a mirror's reflection): the
+// cells are read bilinearly in the surface's plane, so that the reflection of a wall is not a
+// mosaic of one value per cell. Of the four cells around p in the plane of its normal's
+// dominant axis (p's own among them) a neighbour joins with its bilinear weight where it holds
+// light, its point lies on p's plane (within half a cell), and its value is within a factor
+// RC_BLEND_RANGE of p's own cell's: the blend smooths the cells' steps and noise, not a real edge
+// of the indirect light. The same test keeps a lit room's cells out of a dark room's across a
+// wall thinner than a cell, where a neighbour's point may lie behind the wall (only p's own
+// cell's point is checked by a visibility ray). Four lookups, no ray.
+#define RC_BLEND_RANGE 4.0
+vec3 rc_blend(vec3 p, vec3 n, uint copy, vec3 home) {
+    float cell = rc_cell_size(p);
+    uint bucket = rc_normal_bucket(n);
+    uint axis = bucket / 2u;
+    // The two in-plane axes, and p's position on the lattice of cell centres along them.
+    uint u = axis == 0u ? 1u : 0u, v = axis == 2u ? 1u : 2u;
+    vec3 g = p / cell;
+    ivec3 own = ivec3(floor(g));
+    vec2 f = vec2(g[u], g[v]) - 0.5;
+    ivec2 base = ivec2(floor(f));
+    f -= vec2(base);
+    float home_l = luminance(home);
+    vec3 sum = vec3(0.0);
+    float wsum = 0.0;
+    [[unroll]] for (int i = 0; i < 4; ++i) {
+        ivec3 c = own;
+        c[u] = base.x + (i & 1);
+        c[v] = base.y + (i >> 1);
+        float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+        vec3 value = home;
+        if (c != own) {
+            uint slot = rc_find_key(rc_cell_key(c, cell, bucket), false);
+            if (slot == RC_NONE || rc_cells[slot].normal.w == 0.0) continue;
+            vec4 radiance = rc_cells[slot].radiance[copy];
+            float l = luminance(radiance.rgb);
+            bool near_plane = abs(dot(rc_cells[slot].point.xyz - p, n)) <= 0.5 * cell;
+            bool alike = l <= RC_BLEND_RANGE * home_l && home_l <= RC_BLEND_RANGE * l;
+            if (!(radiance.a > 0.0) || !near_plane || !alike) continue;
+            value = radiance.rgb;
+        }
+        sum += w * value;
+        wsum += w;
+    }
+    return sum / wsum;  // p's own cell weighs at least 1/4
+}
+
 // The cache's C at surface point p (geometric normal n) reached by a ray of length t, from
 // radiance copy `copy`, when the cache may answer: the cell exists, has samples, and the ray is
 // long enough not to end in its own origin's cell. The answer holds if the cell's point sees p
 // (the caller traces `a`'s visibility ray). `from_screen`: a gi or reflection query, which
-// claims absent cells, proposes points and keeps cells alive.
-bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandidate a) {
+// claims absent cells, proposes points and keeps cells alive. `blend`: the answer is
+// rc_blend's.
+bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, bool blend, uint copy, out RcCandidate a) {
     a = RcCandidate(vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, false);
     if (rc.enabled == 0u || t < RC_MIN_CELLS * rc_cell_size(p)) return false;
     uint slot = rc_find(p, n, from_screen);
@@ -198,7 +252,7 @@ bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, uint copy, out RcCandi
     vec3 d = rc_cells[slot].point.xyz + rc_cells[slot].normal.xyz * lift - a.from;
     a.len = length(d);
     a.dir = a.len > 1e-6 ? d / a.len : vec3(0.0, 0.0, 1.0);
-    a.c = radiance.rgb;
+    a.c = blend ? rc_blend(p, n, copy, radiance.rgb) : radiance.rgb;
     return true;
 }
 
@@ -249,8 +303,13 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                                                    : vec3(0.0);
         RcCandidate cached;
         cached.empty = false;
+#ifdef RC_BLEND_FIRST
+        bool blend = vertex == 0u;
+#else
+        bool blend = false;
+#endif
         bool may_cache = scatters && !specular && vertex >= first_cached &&
-                         rc_lookup(s.position, s.normal_geo, t, from_screen, copy, cached);
+                         rc_lookup(s.position, s.normal_geo, t, from_screen, blend, copy, cached);
         // A cell that holds no light yet (every cell in the first frame, a place just come into
         // view) cannot answer: the path traces on as deep as a young cell's update does, so
         // those frames miss little of the light beyond.
