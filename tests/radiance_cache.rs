@@ -266,8 +266,10 @@ fn a_mirror_does_not_show_the_cache_as_patches_of_one_value() {
     common::render_frames(&mut r, 16);
     let radiance = luminances(&r.read_output(reflections::RADIANCE).unwrap());
     let ids = r.read_output(gbuffer::IDS).unwrap();
+    let channels = ids.channels;
     let Texels::U32(ids) = &ids.texels else { panic!("gbuffer ids are not u32") };
-    let on_mirror = |i: usize| ids[i * 2 + 1] == mirror && radiance[i] > 1e-3;
+    // Per pixel (instance, material).
+    let on_mirror = |i: usize| ids[i * channels + 1] == mirror && radiance[i] > 1e-3;
     for (axis, step) in [("vertical", w), ("horizontal", 1)] {
         let pairs: Vec<(usize, usize)> = (0..w * h)
             .filter(|&i| if step == 1 { i % w + 1 < w } else { i + w < w * h })
