@@ -52,8 +52,8 @@ pub struct FrameCost {
 
 /// A warm-up lasts at least this long, whatever the number of frames asked for: a GPU raises its
 /// clocks over the first frames. On an NVIDIA H200 the first `bench frame` of a process
-/// measured 640x360 at 12.9 ms a frame after 4 warm-up frames, and the next one, on the warmed
-/// GPU, 3.3 ms; on lavapipe 4 frames take longer than this anyway.
+/// summed 640x360's passes to 12.9 ms after 4 warm-up frames, and the next one, on the warmed
+/// GPU, to 3.3 ms; on lavapipe 4 frames take longer than this anyway.
 const WARMUP_MIN_SECONDS: f64 = 1.0;
 
 /// Renders at least `warmup` frames of `scene` with `settings` (`bench frame`: the default
