@@ -29,11 +29,12 @@
 //   vertex, and the cache answers at the last one. Where the cache cannot answer (a corner, a
 //   cell still empty, or the cache off) the path traces on.
 //
-// At half rate (`params.half_rate`, never with resampled lights, whose reservoirs every pixel
-// must carry) the pixels of a checkerboard that alternates every frame are traced, and each of
-// the others is marked for gi_fill, which gives it the mean of its traced neighbours that show
-// the same surface; a pixel without one (an edge, a thin object) is traced as well. The
-// denoiser's temporal stage then sees every pixel's own samples every other frame.
+// At half rate (`params.half_rate`) the pixels of a checkerboard that alternates every frame
+// are traced, and each of the others is marked for gi_fill, which gives it the mean of its
+// traced neighbours that show the same surface; a pixel without one (an edge, a thin object)
+// is traced as well. The denoiser's temporal stage then sees every pixel's own samples every
+// other frame. An untraced pixel hands its reprojected reservoir on unchanged, so a reservoir
+// gains candidates every other frame and keeps its choice in between.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 // The shadow rays toward resampled lights teach the light grid what its cells see.
@@ -79,15 +80,20 @@ layout(push_constant) uniform Params {
 
 // Last frame's reservoir where this pixel's surface was, re-targeted here; empty after a cut, a
 // light change, or where that pixel showed another surface.
-LightReservoir previous_reservoir(ivec2 px, uint id, float z, vec3 ng, ShadingPoint sp) {
-    if ((frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u) return reservoir_empty();
+// The stored texel, as it was; an empty reservoir's where there is none.
+vec4 previous_reservoir_texel(ivec2 px, uint id, float z, vec3 ng) {
+    vec4 empty = reservoir_pack(reservoir_empty());
+    if ((frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u) return empty;
     ivec2 q = ivec2(floor(vec2(px) + 0.5 - imageLoad(g_motion, px).xy));
-    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) return reservoir_empty();
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) return empty;
     if (!reservoir_consistent(id, z, ng, imageLoad(prev_ids, q).x, imageLoad(prev_depth, q).r,
                               imageLoad(prev_normal_geo, q).xyz)) {
-        return reservoir_empty();
+        return empty;
     }
-    return reservoir_unpack(imageLoad(prev_reservoir, q), sp);
+    return imageLoad(prev_reservoir, q);
+}
+LightReservoir previous_reservoir(ivec2 px, uint id, float z, vec3 ng, ShadingPoint sp) {
+    return reservoir_unpack(previous_reservoir_texel(px, id, z, ng), sp);
 }
 
 // The lobes gi gathers at pixel `px`: a diffuse one (some albedo left by the metalness) and a
@@ -230,16 +236,20 @@ void shade(ivec2 px) {
 }
 
 // At half rate, what gi_fill needs to fill untraced pixel `px` (common/gi_fill.glsl): its traced
-// neighbours that show the same surface, and its lobes. A neighbour shows it when it is the
+// neighbours that show the same surface, and its signals. A neighbour shows it when it is the
 // same instance (two floors either side of a wall seen edge-on meet on screen at one depth and
 // normal) with the lobes this pixel gathers (its signals are zero for a lobe it lacks), the
 // shading normals are within 25 degrees, and each point lies within 1% of its depth of the
-// other's tangent plane. 0 where none does (the pixel is traced instead) or where the pixel
-// needs no fill (no surface, or no lobe to gather: shade() writes its zeros).
+// other's tangent plane. The specular signal is the rough lobe's, and where lights are
+// resampled also their specular lobe on every surface; a neighbour on the other side of the
+// reflection cut-off would bring the rough lobe to a pixel whose reflection rays cover it, or
+// lack it. 0 where no neighbour qualifies (the pixel is traced instead) or where the pixel
+// needs no fill (no surface, or no signal to gather: shade() writes its zeros).
 uint fill_sources(ivec2 px) {
     uint id = imageLoad(g_ids, px).x;
     bool diffuse = has_diffuse(px), rough = has_rough(px);
-    if (id == NO_INSTANCE || !(diffuse || rough)) return 0u;
+    bool specular = rough || resampled_lights_present();
+    if (id == NO_INSTANCE || !(diffuse || specular)) return 0u;
     float depth = imageLoad(g_depth, px).r;
     vec3 n = imageLoad(g_normal, px).xyz;
     vec3 p = world_position(px, depth);
@@ -247,7 +257,7 @@ uint fill_sources(ivec2 px) {
     for (int i = 0; i < 4; ++i) {
         ivec2 q = px + GI_FILL_OFFSETS[i];
         if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
-        if (imageLoad(g_ids, q).x != id || (diffuse && !has_diffuse(q)) || (rough && !has_rough(q))) continue;
+        if (imageLoad(g_ids, q).x != id || (diffuse && !has_diffuse(q)) || (specular && has_rough(q) != rough)) continue;
         vec3 nq = imageLoad(g_normal, q).xyz;
         float depth_q = imageLoad(g_depth, q).r;
         vec3 d = world_position(q, depth_q) - p;
@@ -255,7 +265,15 @@ uint fill_sources(ivec2 px) {
         sources |= 1u << i;
     }
     if (sources == 0u) return 0u;
-    return sources | (diffuse ? GI_FILL_DIFFUSE : 0u) | (rough ? GI_FILL_ROUGH : 0u);
+    return sources | (diffuse ? GI_FILL_DIFFUSE : 0u) | (specular ? GI_FILL_SPECULAR : 0u);
+}
+
+// An untraced pixel's reservoir for the next frame: last frame's where it shows the same
+// surface, unchanged (the next frame traces the pixel and merges it with its own candidates).
+void carry_reservoir(ivec2 px) {
+    vec4 texel = previous_reservoir_texel(px, imageLoad(g_ids, px).x, imageLoad(g_depth, px).r,
+                                          imageLoad(g_normal_geo, px).xyz);
+    imageStore(out_reservoir, px, texel);
 }
 
 // At full rate one invocation per pixel. At half rate one per horizontal pair of pixels: it
@@ -277,6 +295,7 @@ void main() {
             if (sources != 0u) {
                 imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, -float(sources)));
                 imageStore(out_specular, px, vec4(0.0));
+                if (resampled_lights_present()) carry_reservoir(px);
                 continue;
             }
         }

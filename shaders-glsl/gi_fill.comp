@@ -34,7 +34,7 @@ void main() {
         s_sum += imageLoad(in_specular, q).rgb;
         count += 1.0;
     }
-    bool diffuse = (bits & GI_FILL_DIFFUSE) != 0u, rough = (bits & GI_FILL_ROUGH) != 0u;
+    bool diffuse = (bits & GI_FILL_DIFFUSE) != 0u, specular = (bits & GI_FILL_SPECULAR) != 0u;
     imageStore(out_radiance, px, vec4(diffuse ? d_sum / count : vec3(0.0), 1.0));
-    imageStore(out_specular, px, vec4(rough ? s_sum / count : vec3(0.0), 1.0));
+    imageStore(out_specular, px, vec4(specular ? s_sum / count : vec3(0.0), 1.0));
 }

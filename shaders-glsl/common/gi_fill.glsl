@@ -7,6 +7,6 @@
 // Left, right, above, below: in a checkerboard every one is traced when the pixel is not.
 const ivec2 GI_FILL_OFFSETS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 #define GI_FILL_DIFFUSE 16u  // the pixel keeps a diffuse signal
-#define GI_FILL_ROUGH 32u    // the pixel keeps a specular one (rougher than the reflection cut-off)
+#define GI_FILL_SPECULAR 32u // the pixel keeps a specular one (gi.comp's fill_sources says which)
 
 #endif

@@ -43,8 +43,8 @@ pub struct GiSettings {
     /// the cache answers at the bounce ray's hit); with the cache off, the bounces traced.
     pub bounces: u32,
     /// Trace half of the pixels each frame, on a checkerboard that alternates, and fill the
-    /// others from their traced neighbours (gi.comp, then gi_fill). Not with resampled lights,
-    /// whose reservoirs every pixel carries.
+    /// others from their traced neighbours (gi.comp, then gi_fill); an untraced pixel hands its
+    /// resampled lights' reservoir on as it was.
     pub half_rate: bool,
 }
 
@@ -91,13 +91,11 @@ pub fn new(
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), resampled_lights),
     ];
-    let half_rate = s.half_rate && !resampled_lights;
+    let half_rate = s.half_rate;
     if half_rate {
         log::info!(
             "gi: half of the pixels traced each frame (a checkerboard), the others filled from their neighbours"
         );
-    } else if s.half_rate {
-        log::info!("gi: every pixel traced each frame: the resampled lights' reservoirs need every pixel");
     }
     let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff, half_rate: half_rate.into() };
     let mut gi =
