@@ -11,16 +11,18 @@
 // lose the few percent of light its specular lobe reflects.
 //
 // What it covers, so that nothing is counted twice (see composite.comp):
-// - direct light on the diffuse lobe from emissive triangles and the environment: a light
-//   sample drawn among those alone (the punctual lights are shaded by composite with
-//   ray-traced shadows, or resampled below: a draw that could pick one would be wasted there)
-//   and the bounce ray hitting an emitter or escaping, combined with the power heuristic;
+// - direct light on the diffuse lobe from the environment: a sample of the environment alone
+//   (the punctual lights are shaded by composite with ray-traced shadows, the emitters and the
+//   other punctual lights resampled below: a draw that could pick one would be wasted there)
+//   and the bounce ray escaping, combined with the power heuristic;
 // - direct light from the punctual lights past the first SHADOWED_LIGHTS (composite shades those
-//   with the shadows chain's visibility): one light per pixel resampled from candidates and
-//   last frame's choice (common/light_reservoir.glsl), whatever the number of lights; its
-//   diffuse lobe goes into the diffuse signal and its specular lobe into gi.specular on every
-//   surface (the reflections pass adds it under the cut-off, where its rays cannot hit a
-//   punctual light). The reservoir goes to gi.reservoir for the next frame;
+//   with the shadows chain's visibility) and from the emissive triangles: one light per pixel
+//   resampled from candidates and last frame's choice (common/light_reservoir.glsl), whatever
+//   the number of lights; its diffuse lobe goes into the diffuse signal and its specular lobe
+//   into gi.specular, a punctual light's on every surface (the reflections pass adds it under
+//   the cut-off, where its rays cannot hit a punctual light), an emitter's on rough ones (under
+//   the cut-off the reflection rays find it). The bounce ray hitting an emitter adds no direct
+//   light (the reservoir has it). The reservoir goes to gi.reservoir for the next frame;
 // - indirect light (the bounce ray goes straight on through see-through surfaces, as the light
 //   sample's shadow ray does: common/pass_through.glsl): at the bounce ray's hit, next-event
 //   estimation toward a light chosen by power (any kind, with a shadow ray), and the light that
@@ -42,7 +44,6 @@
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
-#include "common/area_lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 #include "common/light_reservoir.glsl"
@@ -109,9 +110,10 @@ void shade(ivec2 px) {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = has_rough(px);
     bool diffuse = has_diffuse(px);
-    bool resampled = resampled_lights_present();
+    bool resampled = reservoirs_present();
     uvec2 ids = imageLoad(g_ids, px).xy;
-    if (ids.x == NO_INSTANCE || !(diffuse || rough || resampled)) {
+    // (A smooth metal takes only the resampled punctual lights' specular lobe here.)
+    if (ids.x == NO_INSTANCE || !(diffuse || rough || resampled_lights_present())) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
         if (resampled) imageStore(out_reservoir, px, reservoir_pack(reservoir_empty()));
@@ -135,11 +137,11 @@ void shade(ivec2 px) {
     // emitter it aims at. Three shadow rays at most, from one call site (the compute backend
     // inlines its traversal at every call, and each copy lengthens a CPU driver's compile; an
     // unrolled loop would copy it again):
-    //   0: a light sample of the emitters and the environment alone (area_light_sample: the
-    //      punctual lights are composite's or the reservoir's);
+    //   0: a sample of the environment alone (the other lights are composite's or the
+    //      reservoir's);
     //   1: the frame's resampled-light candidate, tested before it is merged;
     //   2: last frame's resampled light, re-tested where it wins the merge.
-    ShadingPoint sp = ShadingPoint(origin, n, ng, v, m);
+    ShadingPoint sp = ShadingPoint(origin, n, ng, v, m, rough);
     LightReservoir r = reservoir_empty();
     LightReservoir prev = reservoir_empty();
     if (resampled) {
@@ -147,27 +149,26 @@ void shade(ivec2 px) {
         prev = previous_reservoir(px, ids.x, depth, ng, sp);
     }
     NeeSample chosen = nee_none();  // the resampled light's sample, once found visible
-    // The area lights' share of the light table, which their sampler's densities are divided
-    // by (0: none, and nothing to draw).
-    float area_share = area_light_share();
+    // Whether the environment sends light (else nothing to draw toward it).
+    bool env_lit = light_table.entry_count > 0u && light_entries[light_table.env_entry].pmf > 0.0;
     [[dont_unroll]] for (uint k = 0u; k < 3u; ++k) {
         NeeSample ls;
         if (k == 0u) {
-            // The numbers are drawn either way, so scenes without area lights keep their streams.
+            // The numbers are drawn either way, so scenes without an environment keep their streams.
             vec3 u = rng_next3(rng);
-            if (!(area_share > 0.0)) continue;
-            ls = area_light_sample(origin, u, area_share);
+            if (!env_lit) continue;
+            ls = sample_environment(u.yz, 1.0);
             if (!(ls.pdf > 0.0)) continue;
         } else if (k == 1u) {
             if (!(r.w_sum > 0.0)) continue;
-            ls = reservoir_light_sample(sp, r.light, r.u);
+            ls = reservoir_light_sample(sp, r.light, r.u, true);
         } else {
             // (Without resampled lights no random number is drawn here, so those scenes keep the
             // random streams, and so the images, they had before the reservoirs.)
             if (!resampled) break;
             // An occluded candidate of this frame has weight 0 here, only its count.
             if (!reservoir_merge(r, prev.light, prev.u, prev.w_sum, prev.p_hat, prev.m, rng_next(rng))) break;
-            ls = reservoir_light_sample(sp, r.light, r.u);
+            ls = reservoir_light_sample(sp, r.light, r.u, true);
         }
         float cos_l = max(dot(n, ls.dir), 0.0);
         // What passes the see-through surfaces on the way scales the sample.
@@ -178,7 +179,7 @@ void shade(ivec2 px) {
             ls.weight = vec3(0.0);
         }
         bool visible = dot(ls.weight, ls.weight) > 0.0;
-        if (k > 0u && traced) light_grid_learn(origin, r.light, visible);
+        if (k > 0u && traced && reservoir_punctual(r.light)) light_grid_learn(origin, r.light, visible);
         if (k == 0u) {
             if (!visible) continue;
             float w = mis_power(ls.pdf, cos_l * INV_PI);
@@ -197,7 +198,7 @@ void shade(ivec2 px) {
             vec3 le = chosen.weight * w;
             float cos_l = max(dot(n, chosen.dir), 0.0);
             l_sum += le * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, chosen.dir);
-            spec_sum += le * brdf_eval_specular_cos(m, n, v, chosen.dir);
+            if (rough || reservoir_punctual(r.light)) spec_sum += le * brdf_eval_specular_cos(m, n, v, chosen.dir);
         }
         imageStore(out_reservoir, px, reservoir_pack(r));
     }
@@ -216,11 +217,13 @@ void shade(ivec2 px) {
         Hit h = trace_closest_through(origin, dir, through, rng, s, travelled);
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
         if (h.instance == NO_HIT) {
-            bounce = env_eval(dir) * (area_share > 0.0 ? mis_power(pdf, light_pdf_environment(dir) / area_share) : 1.0);
+            bounce = env_eval(dir) * (env_lit ? mis_power(pdf, env_pdf(dir)) : 1.0);
         } else {
-            if (emitter_visible_side(h.instance, h.primitive, dir)) {
-                float lp = area_share > 0.0 ? light_pdf_emitter(h.instance, h.primitive, origin, s.position) / area_share : 0.0;
-                bounce += s.mat.emissive * mis_power(pdf, lp);
+            // An emitter the reservoirs can draw is theirs; one they cannot (no power in the
+            // table) only this ray finds.
+            if (emitter_visible_side(h.instance, h.primitive, dir) &&
+                !(light_pdf_emitter(h.instance, h.primitive, origin, s.position) > 0.0)) {
+                bounce += s.mat.emissive;
             }
             uint traced = max(params.bounces, 1u);
             uint vertices = rc.enabled != 0u ? max(traced, RC_VERTICES) : traced;
@@ -240,8 +243,8 @@ void shade(ivec2 px) {
 // same instance (two floors either side of a wall seen edge-on meet on screen at one depth and
 // normal) with the lobes this pixel gathers (its signals are zero for a lobe it lacks), the
 // shading normals are within 25 degrees, and each point lies within 1% of its depth of the
-// other's tangent plane. The specular signal is the rough lobe's, and where lights are
-// resampled also their specular lobe on every surface; a neighbour on the other side of the
+// other's tangent plane. The specular signal is the rough lobe's, and where punctual lights
+// are resampled also their specular lobe on every surface; a neighbour on the other side of the
 // reflection cut-off would bring the rough lobe to a pixel whose reflection rays cover it, or
 // lack it. 0 where no neighbour qualifies (the pixel is traced instead) or where the pixel
 // needs no fill (no surface, or no signal to gather: shade() writes its zeros).
@@ -295,7 +298,7 @@ void main() {
             if (sources != 0u) {
                 imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, -float(sources)));
                 imageStore(out_specular, px, vec4(0.0));
-                if (resampled_lights_present()) carry_reservoir(px);
+                if (reservoirs_present()) carry_reservoir(px);
                 continue;
             }
         }

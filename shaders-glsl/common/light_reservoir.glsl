@@ -1,23 +1,32 @@
-// Direct light from the punctual lights past the first SHADOWED_LIGHTS, whatever their number:
-// resampled importance sampling with a per-pixel reservoir kept across frames (the candidate
-// and temporal steps of ReSTIR DI, Bitterli et al. 2020). gi.comp drives it and traces its
-// shadow rays.
+// Direct light from the punctual lights past the first SHADOWED_LIGHTS and from the emissive
+// triangles, whatever their number: resampled importance sampling with a per-pixel reservoir
+// kept across frames (the candidate and temporal steps of ReSTIR DI, Bitterli et al. 2020).
+// gi.comp drives it and traces its shadow rays.
 //
-// - A sample is a light and the two numbers u that place a point on it (sphere and disk lights;
-//   the others ignore u), so it means the same thing at any shading point.
-// - Candidates: RIS_CANDIDATES lights drawn from the shading point's cell of the light grid
-//   (common/light_grid.glsl: the resampled lights that reach it, weighed by what they can
-//   deliver there), or by power from all the resampled lights outside the grid.
-// - Target p_hat: the luminance of the unshadowed contribution f(v, l) cos Le, so that distance,
-//   range, spot cone, cosine and both lobes steer the choice, times what the light grid has
-//   learned of how often the light's group is seen from the pixel's cell (light_grid_seen).
+// - A sample is an entry of the light table (a punctual light's is its index; an emissive
+//   triangle's comes after them) and the two numbers u that place a point on it (sphere and
+//   disk lights, triangles; the other lights ignore u), so it means the same thing at any
+//   shading point.
+// - Candidates: RIS_CANDIDATES, each an emissive triangle by power (with the probability of
+//   the emitters' share of the two kinds' power) or a resampled light from the shading point's
+//   cell of the light grid (common/light_grid.glsl: the resampled lights that reach it, weighed
+//   by what they can deliver there), or by power from all of them outside the grid.
+// - Target p_hat: the luminance of the unshadowed contribution f(v, l) cos Le per unit of u,
+//   so that distance, range, spot cone, the emitter's cosine and area, the surface's cosine
+//   and both lobes steer the choice, times what the light grid has learned of how often the
+//   light's group is seen from the pixel's cell (light_grid_seen). For a triangle Le is its
+//   material's emissive factor, without the texture (a texture read per candidate; a target
+//   need only be positive wherever the contribution is), and f only the lobes gi keeps of an
+//   emitter's light: the diffuse one, and the specular one where the surface is rougher than
+//   the reflections' cut-off (under it the reflection rays find the emitters).
 // - This pixel's own visibility is not in p_hat (a ray per candidate would cost what it saves), but it is in
 //   what a reservoir carries forward: the frame's chosen candidate is shadow-tested before it is
 //   merged, an occluded one enters with weight 0 (its candidates still count in M), and last
 //   frame's choice is tested again when it wins (occluded: weight 0, count kept). So once a pixel has found a light it can see,
 //   it keeps it until a better visible one turns up; a light behind a wall can be drawn (noise)
 //   but never shine through it.
-// - Unbiased contribution weight W = w_sum / (M p_hat(y)); the estimate is f Le(y) W. Merging
+// - Unbiased contribution weight W = w_sum / (M p_hat(y)); the estimate is f Le(y) W, with the
+//   emitter's texture. Merging
 //   last frame's reservoir uses the 1/M weights (biased where neighbouring surfaces differ,
 //   which the reprojection test limits) with its M capped at RESERVOIR_M_CAP, so an old choice
 //   cannot outweigh new candidates forever.
@@ -48,8 +57,25 @@ struct LightReservoir {
 
 LightReservoir reservoir_empty() { return LightReservoir(NO_LIGHT, vec2(0.0), 0.0, 0.0, 0.0); }
 
-// Whether some light is left to resampling.
+// Whether some punctual light is left to resampling.
 bool resampled_lights_present() { return frame.light_count > SHADOWED_LIGHTS && light_table.entry_count > 0u; }
+
+// The emissive triangles' share of the light table's power (0: none emits).
+float emitter_share() {
+    uint first = light_table.first_emitter_entry;
+    uint end = light_table.env_entry;
+    if (light_table.entry_count == 0u || first >= end) return 0.0;
+    return light_entries[end - 1u].cdf - (first == 0u ? 0.0 : light_entries[first - 1u].cdf);
+}
+
+// Whether pixels keep reservoirs: some punctual light is resampled, or some triangle emits.
+bool reservoirs_present() { return resampled_lights_present() || emitter_share() > 0.0; }
+
+// Whether light-table entry `light` is an emissive triangle, or a resampled punctual light.
+bool reservoir_emitter(uint light) {
+    return light >= light_table.first_emitter_entry && light < light_table.env_entry;
+}
+bool reservoir_punctual(uint light) { return light >= SHADOWED_LIGHTS && light < frame.light_count; }
 
 // The shading point a reservoir is evaluated at.
 struct ShadingPoint {
@@ -58,21 +84,40 @@ struct ShadingPoint {
     vec3 ng;      // geometric normal
     vec3 v;       // toward the viewer
     BrdfInput m;
+    bool rough;   // rougher than the reflections' cut-off: gi keeps an emitter's specular lobe
 };
 
 // The light's sample for (light, u) at `sp` with its density in u taken as 1: `weight` is the
-// radiance arriving per unit of u (sphere: times the cone's solid angle), nee_none() when the
-// light is behind the surface.
-NeeSample reservoir_light_sample(ShadingPoint sp, uint light, vec2 u) {
-    NeeSample s = sample_punctual_light(light, sp.origin, u, 1.0);
+// radiance arriving per unit of u (sphere: times the cone's solid angle; triangle: times its
+// area and cosine over the squared distance), nee_none() when the light is behind the
+// surface. `exact`: a triangle's radiance with its texture, else its material's factor alone
+// (the target's).
+NeeSample reservoir_light_sample(ShadingPoint sp, uint light, vec2 u, bool exact) {
+    NeeSample s;
+    if (reservoir_emitter(light)) {
+        uint index = light - light_table.first_emitter_entry;
+        if (exact) {
+            s = sample_emitter(index, sp.origin, u, 1.0);
+        } else {
+            Emitter e = emitters[index];
+            vec2 bary;
+            s = emitter_point(e, sp.origin, u, bary);
+            s.weight *= materials[instances[e.instance].material].emissive_factor;
+        }
+    } else {
+        s = sample_punctual_light(light, sp.origin, u, 1.0);
+    }
     if (dot(s.dir, sp.ng) <= 0.0) return nee_none();
     return s;
 }
 
-// p_hat: luminance of f(v, l) cos Le for the sample, times what the light grid learned of the
-// light's visibility from here (s.seen).
-float reservoir_target(ShadingPoint sp, NeeSample s) {
-    float t = luminance(brdf_eval_cos(sp.m, sp.n, sp.v, s.dir) * s.weight) * s.seen;
+// p_hat: luminance of f(v, l) cos Le for the sample (an emitter's: the lobes gi keeps of it),
+// times what the light grid learned of the light's visibility from here (s.seen).
+float reservoir_target(ShadingPoint sp, NeeSample s, bool emitter) {
+    vec3 f = emitter && !sp.rough
+                 ? brdf_diffuse_albedo(sp.m) * brdf_diffuse_weight(sp.m, sp.n, sp.v, s.dir) * (max(dot(sp.n, s.dir), 0.0) * INV_PI)
+                 : brdf_eval_cos(sp.m, sp.n, sp.v, s.dir);
+    float t = luminance(f * s.weight) * s.seen;
     return t > 0.0 && !isinf(t) ? t : 0.0;
 }
 
@@ -89,20 +134,40 @@ bool reservoir_merge(inout LightReservoir r, uint light, vec2 u, float w, float 
     return true;
 }
 
-// The frame's own reservoir: RIS_CANDIDATES candidates from the light grid, resampled by p_hat.
+// An emissive triangle's entry for u in [0, 1), by power among them, and the probability of
+// choosing it among them. Needs emitter_share() > 0.
+uint emitter_pick(float u, float share, out float pmf) {
+    uint first = light_table.first_emitter_entry;
+    float lo = first == 0u ? 0.0 : light_entries[first - 1u].cdf;
+    // Rounding can put lo + u share just outside the emitters' stretch.
+    uint entry = clamp(light_entry_search(lo + u * share), first, light_table.env_entry - 1u);
+    pmf = light_entries[entry].pmf / share;
+    return entry;
+}
+
+// The frame's own reservoir: RIS_CANDIDATES candidates (emissive triangles by power, punctual
+// lights from the light grid), resampled by p_hat.
 LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
     LightReservoir r = reservoir_empty();
-    ResampledLights lights_here = resampled_lights_at(sp.origin);
+    ResampledLights lights_here = ResampledLights(false, 0u, uvec2(0u), 0.0, 0.0);
+    if (resampled_lights_present()) lights_here = resampled_lights_at(sp.origin);
+    float emitters = emitter_share();
+    // The chance that a candidate is a triangle: the emitters' part of the two kinds' power
+    // (0 without emitters, which keeps the punctual lights' draws as they were).
+    float p_emitter = emitters / (emitters + (lights_here.hi - lights_here.lo));
     // Not unrolled: each copy of the body would lengthen a CPU driver's compile.
     [[dont_unroll]] for (uint k = 0u; k < RIS_CANDIDATES; ++k) {
         vec3 u = rng_next3(rng);
-        float pmf, seen;
-        uint light = resampled_light_pick(lights_here, u.x, pmf, seen);
+        float pmf, seen = 1.0;
+        bool emitter = u.x < p_emitter;
+        uint light = emitter ? emitter_pick(u.x / p_emitter, emitters, pmf)
+                             : resampled_light_pick(lights_here, (u.x - p_emitter) / (1.0 - p_emitter), pmf, seen);
+        pmf *= emitter ? p_emitter : 1.0 - p_emitter;
         float w = 0.0, p_hat = 0.0;
-        if (light != NO_LIGHT) {
-            NeeSample s = reservoir_light_sample(sp, light, u.yz);
+        if (light != NO_LIGHT && pmf > 0.0) {
+            NeeSample s = reservoir_light_sample(sp, light, u.yz, false);
             s.seen = seen;
-            p_hat = reservoir_target(sp, s);
+            p_hat = reservoir_target(sp, s, emitter);
             w = p_hat / pmf;
         }
         reservoir_merge(r, light, u.yz, w, p_hat, 1.0, rng_next(rng));
@@ -171,12 +236,13 @@ LightReservoir reservoir_unpack(vec4 texel, ShadingPoint sp) {
     if (!(texel.z > 0.0)) return r;
     r.m = min(texel.z, RESERVOIR_M_CAP);
     uint light = floatBitsToUint(texel.x);
-    if (light < SHADOWED_LIGHTS || light >= frame.light_count || !(texel.y > 0.0)) return r;
+    bool emitter = reservoir_emitter(light);
+    if (!(emitter || reservoir_punctual(light)) || !(texel.y > 0.0)) return r;
     r.light = light;
     r.u = unpackUnorm2x16(floatBitsToUint(texel.w));
-    NeeSample s = reservoir_light_sample(sp, light, r.u);
-    s.seen = light_grid_seen(sp.origin, light);
-    r.p_hat = reservoir_target(sp, s);
+    NeeSample s = reservoir_light_sample(sp, light, r.u, false);
+    s.seen = emitter ? 1.0 : light_grid_seen(sp.origin, light);
+    r.p_hat = reservoir_target(sp, s, emitter);
     r.w_sum = r.p_hat * texel.y * r.m;
     return r;
 }

@@ -260,22 +260,31 @@ NeeSample sample_punctual_light(uint index, vec3 p, vec2 u, float pmf) {
     return s;
 }
 
-NeeSample sample_emitter(uint index, vec3 p, vec2 u, float pmf) {
-    Emitter e = emitters[index];
-    vec2 bary = sample_triangle(u);
+// Point u of emitter e seen from p (`bary` its barycentrics): direction and distance, and as
+// `weight` (grey) the factor cos_l area / dist^2 that turns its radiance into the sample's
+// weight for a density of 1 in u; nee_none() where p sees a side that does not emit.
+NeeSample emitter_point(Emitter e, vec3 p, vec2 u, out vec2 bary) {
+    bary = sample_triangle(u);
     vec3 q = e.p0 + bary.x * e.e1 + bary.y * e.e2;
     vec3 d = q - p;
     float dist2 = dot(d, d);
     if (dist2 <= 0.0) return nee_none();
-    NeeSample s;
+    NeeSample s = nee_none();
     s.dist = sqrt(dist2);
     s.dir = d / s.dist;
     float cos_l = emitter_cosine(e, s.dir);
     if (cos_l <= 0.0) return nee_none();
-    s.pdf = pmf * dist2 / (cos_l * e.area);
+    s.weight = vec3(cos_l * e.area / dist2);
+    return s;
+}
+
+NeeSample sample_emitter(uint index, vec3 p, vec2 u, float pmf) {
+    Emitter e = emitters[index];
+    vec2 bary;
+    NeeSample s = emitter_point(e, p, u, bary);
+    if (!(s.weight.x > 0.0)) return nee_none();
+    s.pdf = pmf / s.weight.x;
     s.weight = emitter_emission(e.instance, e.primitive, bary) / s.pdf;
-    s.light = NO_LIGHT;
-    s.seen = 1.0;
     return s;
 }
 

@@ -1,7 +1,8 @@
 //! gi: diffuse global illumination, one bounce ray per pixel with next-event estimation and the
 //! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
-//! (shaders-glsl/gi.comp). It also shades the punctual lights past the shadowed ones, one
-//! resampled per pixel with a reservoir kept across frames (common/light_reservoir.glsl). At
+//! (shaders-glsl/gi.comp). It also shades the emissive triangles and the punctual lights past
+//! the shadowed ones, one resampled per pixel with a reservoir kept across frames
+//! (common/light_reservoir.glsl). At
 //! half rate gi_fill completes its signals.
 
 use super::PassBuilder;
@@ -16,14 +17,16 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 pub const NAME: &str = "gi";
-/// Demodulated diffuse radiance: direct light from emitters and the environment, and indirect.
+/// Demodulated diffuse radiance: direct light from the environment and the resampled lights
+/// (emitters and punctual lights past the shadowed ones), and indirect.
 /// At half rate the untraced pixels are black, with what gi_fill needs in alpha.
 pub const RADIANCE: Output = Output::new(NAME, "radiance");
 /// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples;
 /// on every surface, the resampled lights' share of it.
 pub const SPECULAR: Output = Output::new(NAME, "specular");
-/// Per pixel the resampled light chosen, its contribution weight, the candidates behind it and
-/// the point on the light, for the next frame (1x1 when no light is resampled).
+/// Per pixel the resampled light chosen (its light-table entry), its contribution weight, the
+/// candidates behind it and the point on the light, for the next frame (1x1 when no light is
+/// resampled).
 pub const RESERVOIR: Output = Output::new(NAME, "reservoir");
 const RESERVOIR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
@@ -65,14 +68,14 @@ pub struct Signals {
 
 /// gi, and gi_fill after it at half rate.
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
-/// `resampled_lights`: whether the plan leaves lights to gi's reservoirs (frame-sized then).
+/// `reservoirs`: whether the plan leaves lights to gi's reservoirs (frame-sized then).
 pub fn new(
     b: &PassBuilder,
     s: &GiSettings,
     seed: u32,
     roughness_cutoff: f32,
     cache: &Cache,
-    resampled_lights: bool,
+    reservoirs: bool,
 ) -> Result<Signals> {
     let mut inputs: Vec<Input> = [
         gbuffer::DEPTH,
@@ -89,7 +92,7 @@ pub fn new(
     let outputs = vec![
         OutputDesc::storage(RADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
-        reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), resampled_lights),
+        reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), reservoirs),
     ];
     let half_rate = s.half_rate;
     if half_rate {
@@ -112,11 +115,11 @@ pub fn new(
 }
 
 /// The reservoirs' copy for the next frame.
-pub fn kept(resampled_lights: bool) -> Kept {
+pub fn kept(reservoirs: bool) -> Kept {
     let k = Kept::new(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar);
-    if resampled_lights { k } else { k.with_extent(1, 1) }
+    if reservoirs { k } else { k.with_extent(1, 1) }
 }
 
-fn reservoir_size(d: OutputDesc, resampled_lights: bool) -> OutputDesc {
-    if resampled_lights { d } else { d.with_extent(1, 1) }
+fn reservoir_size(d: OutputDesc, reservoirs: bool) -> OutputDesc {
+    if reservoirs { d } else { d.with_extent(1, 1) }
 }

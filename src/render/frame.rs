@@ -60,10 +60,10 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
             settings.seed,
             settings.reflections.roughness_cutoff,
             &cache,
-            plan.resampled_lights > 0,
+            plan.reservoirs(),
         )?;
         passes.extend(gi.passes);
-        kept.push(passes::gi::kept(plan.resampled_lights > 0));
+        kept.push(passes::gi::kept(plan.reservoirs()));
         (gi.radiance.into(), gi.specular.into())
     } else {
         let zero = crate::graph::zero(crate::gpu::vk::Format::R32G32B32A32_SFLOAT, false);

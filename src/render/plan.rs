@@ -41,6 +41,8 @@ pub struct FramePlan {
     pub light_order: Vec<usize>,
     /// Lights past the per-light-shadowed ones, resampled in gi.
     pub resampled_lights: usize,
+    /// Emissive triangles, resampled in gi with those lights.
+    pub emitters: u32,
     /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
     /// cells by it.
     pub scene_diagonal: f32,
@@ -49,6 +51,12 @@ pub struct FramePlan {
 }
 
 impl FramePlan {
+    /// Whether gi keeps a reservoir per pixel: some punctual light or some triangle is
+    /// resampled (common/light_reservoir.glsl).
+    pub fn reservoirs(&self) -> bool {
+        self.resampled_lights > 0 || self.emitters > 0
+    }
+
     /// Everything on (`--full`).
     pub fn full(scene: &Scene) -> Self {
         let light_order = crate::world::lights::shading_order(scene, &[], MAX_SHADOWED_LIGHTS);
@@ -59,6 +67,7 @@ impl FramePlan {
             gi: true,
             culled_lights: Vec::new(),
             resampled_lights: light_order.len().saturating_sub(MAX_SHADOWED_LIGHTS),
+            emitters: crate::world::lights::emitter_bases(scene).1,
             light_order,
             scene_diagonal: scene_diagonal(scene),
             reasons: vec!["--full: every pass runs".into()],
@@ -155,6 +164,15 @@ impl FramePlan {
             )
         });
 
+        let emitters = crate::world::lights::emitter_bases(scene).1;
+        if emitters > 0 {
+            reasons.push(format!(
+                "emitters: {emitters} emissive triangle(s), resampled in gi{}: per pixel one point on one of \
+                 them from candidates drawn by power and last frame's choice, with shadow rays",
+                if resampled_lights > 0 { " with the resampled punctual lights" } else { "" }
+            ));
+        }
+
         let unique = scene.meshes.len();
         reasons.push(format!(
             "geometry: {} instance(s) share {unique} bottom-level structure(s), one per unique mesh",
@@ -179,6 +197,7 @@ impl FramePlan {
             culled_lights,
             light_order,
             resampled_lights,
+            emitters,
             scene_diagonal: scene_diagonal(scene),
             reasons,
         }

@@ -16,6 +16,7 @@ pub const NAMES: &[&str] = &[
     "facet-test",
     "morph-test",
     "many-lights",
+    "many-panels",
     "skin-test",
 ];
 
@@ -29,6 +30,7 @@ pub fn by_name(name: &str) -> Result<Scene> {
         "facet-test" => Ok(facet_test()),
         "morph-test" => Ok(morph_test()),
         "many-lights" => Ok(super::builtin_many_lights::many_lights()),
+        "many-panels" => Ok(super::builtin_many_lights::many_panels()),
         "skin-test" => Ok(super::builtin_skin::skin_test()),
         _ => super::builtin_stability::by_name(name).ok_or_else(|| {
             let known = [NAMES, super::builtin_stability::NAMES].concat().join(", ");

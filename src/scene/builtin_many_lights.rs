@@ -33,6 +33,13 @@ pub mod facts {
     pub const HIDDEN_PREFIX: &str = "hidden.";
     /// Where the strip's centre is.
     pub const STRIP_CENTRE: Vec3 = Vec3::new(0.5 * (STRIP_X - WALL), 0.0, 0.0);
+    /// `many_panels`: square emissive panels (two triangles each) of this side just under the
+    /// ceiling, facing down; VISIBLE_PANELS in the camera's room at x <= VISIBLE_MAX_X, and a
+    /// HIDDEN_PANELS_SIDE^2 grid in the hidden room (their nodes named `hidden.N`).
+    pub const PANEL_SIDE: f32 = 0.4;
+    pub const PANEL_EMISSION: f32 = 8.0;
+    pub const VISIBLE_PANELS: usize = 8;
+    pub const HIDDEN_PANELS_SIDE: usize = 8;
 }
 
 /// Deterministic value in [0, 1) for light `i` and stream `k` (splitmix64).
@@ -127,6 +134,41 @@ pub fn many_lights() -> Scene {
         let radius = if strong || i % 16 == 5 { 0.1 } else { 0.0 };
         let color = Vec3::new(0.6 + 0.4 * hash01(i, 4), 0.6 + 0.4 * hash01(i, 5), 0.6 + 0.4 * hash01(i, 6));
         point(&mut s, format!("{HIDDEN_PREFIX}{i}"), at, color, intensity, None, radius);
+    }
+    s
+}
+
+/// `builtin:many-panels`: the same two rooms lit by emissive panels instead of punctual lights
+/// (see [`facts`]): 144 emissive triangles, 128 of them behind the wall, for the emitters'
+/// resampling what `many_lights` is for the punctual lights'.
+pub fn many_panels() -> Scene {
+    use facts::*;
+    let mut s = many_lights();
+    s.name = "builtin:many-panels".into();
+    s.lights.clear();
+    s.nodes.retain(|n| !n.name.starts_with("visible.") && !n.name.starts_with(HIDDEN_PREFIX));
+    let panel = s.materials.len() as u32;
+    s.materials.push(Material {
+        name: "panel".into(),
+        metallic_factor: 0.0,
+        emissive_factor: Vec3::splat(PANEL_EMISSION),
+        ..Default::default()
+    });
+    let (y, side) = (HEIGHT - 0.02, PANEL_SIDE);
+    // Facing down: X x Z = -Y.
+    let add_panel = |s: &mut Scene, name: String, x: f32, z: f32| {
+        add(s, &name, quad(Vec3::new(x, y, z), Vec3::X * side, Vec3::Z * side, panel), Vec3::ZERO);
+    };
+    for i in 0..VISIBLE_PANELS {
+        let (ix, iz) = (i % 2, i / 2);
+        add_panel(&mut s, format!("visible.{i}"), VISIBLE_MAX_X - 0.8 * ix as f32, -2.1 + 1.4 * iz as f32);
+    }
+    let n = HIDDEN_PANELS_SIDE;
+    for i in 0..n * n {
+        let (ix, iz) = (i % n, i / n);
+        let x = WALL + 0.4 + (HALF_X - WALL - 0.8) * ix as f32 / (n - 1) as f32;
+        let z = -HALF_Z + 0.4 + (2.0 * HALF_Z - 0.8) * iz as f32 / (n - 1) as f32;
+        add_panel(&mut s, format!("{HIDDEN_PREFIX}{i}"), x, z);
     }
     s
 }
