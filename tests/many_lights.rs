@@ -12,6 +12,9 @@
 //!   path tracer's mean luminance (the resampling is consistent); the denoised frame the user
 //!   sees (defaults) is compared with the full reference under a looser bound, because SVGF's
 //!   outlier clamp loses some light there (a known gap, measured in the README).
+//!
+//! `builtin:many-panels`, the same rooms lit by emissive panels, checks the same of the
+//! emissive triangles, which the reservoirs hold too.
 
 mod common;
 

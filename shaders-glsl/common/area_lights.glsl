@@ -1,11 +1,12 @@
 // Emitters and the environment alone, for a lobe whose punctual lights are shaded elsewhere:
 // the reflections pass's glossy lobe (composite and gi.specular have them). A draw that could
 // pick a punctual light would be wasted there. (gi draws the emitters from its reservoirs and
-// samples the environment alone.) The sampler draws the table's entries past the punctual ones, by power among
-// themselves. Their share of the table's power is area_light_share() (0: nothing to draw), and
-// this sampler's densities are the table's divided by it, which is what MIS against it must
-// use: light_pdf_emitter and light_pdf_environment over the share. A file of its own, so that
-// the shaders that do not use it keep their SPIR-V (a CPU driver caches pipelines by it).
+// samples the environment alone.) The sampler draws the table's entries past the punctual
+// ones, by power among themselves. Their share of the table's power is area_light_share() (0:
+// nothing to draw), and this sampler's densities are the table's divided by it, which is what
+// MIS against it must use: light_pdf_emitter and light_pdf_environment over the share. A file
+// of its own, so that the shaders that do not use it keep their SPIR-V (a CPU driver caches
+// pipelines by it).
 #ifndef AREA_LIGHTS_GLSL
 #define AREA_LIGHTS_GLSL
 

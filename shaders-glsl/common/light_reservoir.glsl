@@ -26,10 +26,9 @@
 //   it keeps it until a better visible one turns up; a light behind a wall can be drawn (noise)
 //   but never shine through it.
 // - Unbiased contribution weight W = w_sum / (M p_hat(y)); the estimate is f Le(y) W, with the
-//   emitter's texture. Merging
-//   last frame's reservoir uses the 1/M weights (biased where neighbouring surfaces differ,
-//   which the reprojection test limits) with its M capped at RESERVOIR_M_CAP, so an old choice
-//   cannot outweigh new candidates forever.
+//   emitter's texture. Merging last frame's reservoir uses the 1/M weights (biased where
+//   neighbouring surfaces differ, which the reprojection test limits) with its M capped at
+//   RESERVOIR_M_CAP, so an old choice cannot outweigh new candidates forever.
 // The cost per pixel is RIS_CANDIDATES CDF searches (log N each) and BRDF evaluations and at
 // most two shadow rays, however many lights there are.
 #ifndef LIGHT_RESERVOIR_GLSL
