@@ -666,7 +666,7 @@ pub fn fireflies(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
             "pixels > 10x their 5x5 median",
             "fraction",
             outliers as f64 / counted.max(1) as f64,
-            if denoised { 0.002 } else { 0.12 },
+            if denoised { 0.002 } else { 0.15 },
         ),
         measure(
             "peak / mean luminance",
