@@ -241,9 +241,10 @@ fn grazing_floor() {
 /// room lit only through the hot spot of a tiny very bright emitter. Measured: denoised 0 and
 /// 25 (31 before the clamp kept the fireflies' light, 2026-12-03; 28 since), raw 0.092 and 458
 /// (0.104 and 425 since path vertices take caustics through specular surfaces, sampled as
-/// sparks; 0.114 and 528 since the emitters joined gi's reservoirs, 2026-12-04, whose
-/// candidates draw random numbers before gi's bounce ray does: the count moves with the
-/// streams, and the denoised peak went to 7). Without the radiance cache raw measured 0.011: with it a pixel shows
+/// sparks; 0.114 and 528 since the emitters joined gi's reservoirs, 2026-12-04, and the
+/// denoised peak 7: the raw count rose at the other sizes tried too, 0.098 -> 0.103 at 56x56
+/// and 0.102 -> 0.114 at 64x64, not explained; the emitter faces the ceiling, away from
+/// every surface in view). Without the radiance cache raw measured 0.011: with it a pixel shows
 /// its gi ray's cell, and after 8 frames a cell holds at most 8 cosine samples, the lucky ones
 /// of which saw the hot spot (0.043 after 32 frames, as the cells fill). Bounds 0.002 and 100
 /// denoised, 0.15 and 5000 raw (0.12 until the count reached 0.114) (a peak is one sample's luck). The denoiser must remove at least
