@@ -2,8 +2,7 @@
 //! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
 //! (shaders-glsl/gi.comp). It also shades the emissive triangles and the punctual lights past
 //! the shadowed ones, one resampled per pixel with a reservoir kept across frames
-//! (common/light_reservoir.glsl). At
-//! half rate gi_fill completes its signals.
+//! (common/light_reservoir.glsl). At half rate gi_fill completes its signals.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
@@ -22,7 +21,7 @@ pub const NAME: &str = "gi";
 /// At half rate the untraced pixels are black, with what gi_fill needs in alpha.
 pub const RADIANCE: Output = Output::new(NAME, "radiance");
 /// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples;
-/// on every surface, the resampled lights' share of it.
+/// on every surface, the resampled punctual lights' share of it.
 pub const SPECULAR: Output = Output::new(NAME, "specular");
 /// Per pixel the resampled light chosen (its light-table entry), its contribution weight, the
 /// candidates behind it and the point on the light, for the next frame (1x1 when no light is
@@ -94,16 +93,15 @@ pub fn new(
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), reservoirs),
     ];
-    let half_rate = s.half_rate;
-    if half_rate {
+    if s.half_rate {
         log::info!(
             "gi: half of the pixels traced each frame (a checkerboard), the others filled from their neighbours"
         );
     }
-    let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff, half_rate: half_rate.into() };
+    let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff, half_rate: s.half_rate.into() };
     let mut gi =
         FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)?;
-    if !half_rate {
+    if !s.half_rate {
         return Ok(Signals { passes: vec![Box::new(gi)], radiance: RADIANCE, specular: SPECULAR });
     }
     gi.pixels_per_invocation = [2, 1];
