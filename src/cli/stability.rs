@@ -17,6 +17,9 @@ pub struct StabilityArgs {
     /// Image size, WIDTHxHEIGHT (the bounds were measured at 48x48).
     #[arg(long, default_value = "48x48")]
     size: String,
+    /// Run only the scenario of this name (as the table prints it, e.g. "light off").
+    #[arg(long)]
+    scenario: Option<String>,
     /// JSON output (default: out/bench/stability-<unix time>.json).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -34,9 +37,16 @@ pub fn run(a: &StabilityArgs) -> Result<()> {
     log::info!("ray backend: {} ({why})", picked.variant());
     let shaders = ShaderLibrary::embedded();
     let rig = stability::Rig { ctx: &ctx, shaders: &shaders, backend: picked, width, height };
-    let bar = crate::progress::progress_bar(stability::SCENARIOS.len() as u64, "scenarios");
+    if let Some(name) = &a.scenario
+        && !stability::SCENARIOS.iter().any(|(n, _)| n == name)
+    {
+        let names: Vec<&str> = stability::SCENARIOS.iter().map(|(n, _)| *n).collect();
+        anyhow::bail!("no scenario {name:?} in the stability suite; its scenarios: {}", names.join(", "));
+    }
+    let count = if a.scenario.is_some() { 1 } else { stability::SCENARIOS.len() };
+    let bar = crate::progress::progress_bar(count as u64, "scenarios");
     let start = std::time::Instant::now();
-    let rows = stability::run_all(&rig, &|name: &str| {
+    let rows = stability::run_all(&rig, a.scenario.as_deref(), &|name: &str| {
         bar.set_message(name.to_string());
         bar.inc(1);
     })?;

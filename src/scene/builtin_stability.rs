@@ -6,6 +6,7 @@
 //! | --- | --- |
 //! | `stability-slide` | camera cut, fast pan, ghosting and disocclusion behind a moving cube |
 //! | `stability-lights` | lag after a light moves and after one switches off |
+//! | `stability-lights-resampled` | the same with both lights resampled (four brighter ones behind the wall) |
 //! | `stability-leak` | light leaking through a zero-thickness wall into a sealed room |
 //! | `stability-cache-leak` | light leaking through a wall thinner than a radiance-cache cell |
 //! | `stability-grazing` | shadow acne on a floor lit at a grazing angle, shadow terminator |
@@ -24,6 +25,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 pub const NAMES: &[&str] = &[
     "stability-slide",
     "stability-lights",
+    "stability-lights-resampled",
     "stability-leak",
     "stability-cache-leak",
     "stability-grazing",
@@ -39,6 +41,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
     match name {
         "stability-slide" => Some(slide()),
         "stability-lights" => Some(lights()),
+        "stability-lights-resampled" => Some(lights_resampled()),
         "stability-leak" => Some(leak()),
         "stability-cache-leak" => Some(cache_leak()),
         "stability-grazing" => Some(grazing()),
@@ -208,6 +211,11 @@ pub mod lights_facts {
     pub const SWEEP_END: f32 = 2.5;
     /// The point light the suite switches off (by setting its intensity to 0 between frames).
     pub const SWITCHED: &str = "switched";
+    /// `lights_resampled` adds this many point lights behind the back wall, each BEHIND_POWER
+    /// times as intense as `mover` and `switched`: the renderer gives the shadows chain to the
+    /// brightest lights, so those two are resampled in gi (common/light_reservoir.glsl).
+    pub const BEHIND: usize = 4;
+    pub const BEHIND_POWER: f32 = 4.0;
 }
 
 /// A white room open toward the camera, lit by two point lights: `mover` jumps from the left
@@ -236,6 +244,23 @@ pub fn lights() -> Scene {
             values: vec![MOVER_FROM.extend(0.0), MOVER_TO.extend(0.0), MOVER_TO.extend(0.0)],
         }],
     });
+    s
+}
+
+/// `lights` with BEHIND brighter point lights behind the back wall (z = -3.5), which light
+/// nothing the camera sees: `mover` and `switched` are then among the resampled lights, whose
+/// light comes from per-pixel reservoirs kept across frames, and the suite measures how soon
+/// those follow a light that moves or goes off.
+pub fn lights_resampled() -> Scene {
+    use lights_facts::*;
+    let mut s = lights();
+    s.name = "builtin:stability-lights-resampled".into();
+    for k in 0..BEHIND {
+        let at = Vec3::new(-2.25 + 1.5 * k as f32, 1.5, -3.5);
+        s.nodes.push(node(&format!("behind {k}"), at));
+        let node = s.nodes.len() as u32 - 1;
+        s.lights.push(light(&format!("behind {k}"), LightKind::Point, 12.0 * BEHIND_POWER, node));
+    }
     s
 }
 
