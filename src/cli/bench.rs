@@ -181,6 +181,11 @@ struct SweepArgs {
     /// Replace existing output files.
     #[arg(long)]
     force: bool,
+    /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones
+    /// (needs a build with `--features shader-compiler`): a shader change measured against
+    /// the build's own shaders without rebuilding.
+    #[arg(long)]
+    shader_dir: Option<PathBuf>,
 }
 
 fn run_sweep(a: &SweepArgs) -> Result<()> {
@@ -220,7 +225,10 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
     let (backend, why) = crate::backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", backend.variant());
-    let shaders = ShaderLibrary::embedded();
+    let shaders = match &a.shader_dir {
+        Some(dir) => ShaderLibrary::from_dir(dir)?,
+        None => ShaderLibrary::embedded(),
+    };
     let start = std::time::Instant::now();
     let mut sweeps = Vec::new();
     let mut chart = charts.iter();
