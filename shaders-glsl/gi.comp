@@ -179,7 +179,10 @@ void shade(ivec2 px) {
             ls.weight = vec3(0.0);
         }
         bool visible = dot(ls.weight, ls.weight) > 0.0;
-        if (k > 0u && traced && reservoir_punctual(r.light)) light_grid_learn(origin, r.light, visible);
+        if (k > 0u && traced) {
+            if (reservoir_punctual(r.light)) light_grid_learn(origin, r.light, visible);
+            else light_grid_learn_point(origin, origin + ls.dir * ls.dist, visible);
+        }
         if (k == 0u) {
             if (!visible) continue;
             float w = mis_power(ls.pdf, cos_l * INV_PI);

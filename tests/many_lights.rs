@@ -346,6 +346,33 @@ fn the_light_grid_learns_that_the_wall_hides_the_other_room() {
     common::assert_validation_clean(ctx);
 }
 
+/// The same for the emissive panels of `builtin:many-panels` (no punctual light: the grid's
+/// cells list nothing, and gi's shadow rays toward the panels teach them, by the region each
+/// sampled point lies in): after LEARNING_FRAMES frames the hidden room's groups that rays
+/// tested from the camera's side are found hidden, the camera room's seen. Both backends.
+#[test]
+fn the_light_grid_learns_which_panels_the_wall_hides() {
+    let ctx = common::validated_context();
+    for backend in backends(&ctx) {
+        let mut r = common::renderer(&ctx, many_panels(), settings(true), backend);
+        common::render_frames(&mut r, LEARNING_FRAMES);
+        let (hidden, own_min) = learned(&mut r);
+        let hidden_mean = mean(&hidden);
+        eprintln!(
+            "{backend:?}: panels, {} (camera cell, hidden group) pairs tested, mean estimate {hidden_mean:.4}; \
+             least estimate of a camera-room group {own_min:.4}",
+            hidden.len(),
+        );
+        assert!(hidden.len() > 100, "{backend:?}: only {} (cell, hidden group) pairs were tested", hidden.len());
+        assert!(hidden_mean < 0.5, "{backend:?}: the hidden room's panels are still taken as seen: {hidden_mean}");
+        assert!(
+            own_min > 0.99,
+            "{backend:?}: a camera-room group is taken as hidden from a camera-room cell: {own_min}"
+        );
+    }
+    common::assert_validation_clean(ctx);
+}
+
 /// What the light grid has learned, from the cells wholly on the camera's side of the wall:
 /// the estimates of the hidden room's groups that have been tested (below 1), and the least
 /// estimate of the camera room's groups.

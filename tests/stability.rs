@@ -200,9 +200,10 @@ fn light_off() {
 /// with gi at full rate; the chain's light: 0.042) and the raw frame keeps 0.12 of it for two
 /// frames, the same at full rate and without the light grid's visibility, so neither the
 /// reservoirs (one resampled light: every candidate is the same light, the weight exactly 1)
-/// nor gi's half rate hold it; where it is held is not found (README, Known gaps). A light
-/// switched off: denoised 0.0004, raw 0.025, 0 frames. Bounds 0.13 and 0.16 for the moved
-/// light's first frame, 2 frames of lag both ways; the switched light's as for `light_off`.
+/// nor gi's half rate hold it; where it is held is not found (README, under the stability
+/// table). A light switched off: denoised 0.0004, raw 0.025, 0 frames. Bounds 0.13 and 0.16
+/// for the moved light's first frame, 2 frames of lag both ways; the switched light's as for
+/// `light_off`.
 #[test]
 fn resampled_lights_follow_a_move_and_a_switch() {
     let scene = hybrid_rt::scene::builtin_stability::lights_resampled();

@@ -52,6 +52,10 @@ struct LightGridVisibility {
     uint blocked;
 };
 
+// Light groups along each side of the grid's bounds (the groups by position, then the
+// directional lights' own). Rust: world::light_grid::GROUPS_PER_SIDE.
+#define LIGHT_GRID_GROUPS_PER_SIDE 4u
+
 // Each listed light keeps at least this share of its bound, however rarely its group is seen
 // from the cell, so a light visible from a corner of a cell is still drawn there.
 #define LIGHT_GRID_VISIBILITY_FLOOR 0.01
@@ -140,14 +144,50 @@ float light_grid_seen(vec3 p, uint light) {
     return light_grid_visibility_factor(light_grid_visibility[key]);
 }
 
+// The group of a light at point q (an emissive triangle's sampled point; the grid's cells list
+// punctual lights only, but the groups are regions of the bounds, so an emitter's light is
+// learned per cell and group like theirs): as world::light_grid groups the punctual lights.
+uint light_grid_group_at(vec3 q) {
+    vec3 group_size = vec3(light_grid.dims) / (light_grid.inv_cell * float(LIGHT_GRID_GROUPS_PER_SIDE));
+    vec3 g = clamp(floor((q - light_grid.lo) / group_size), vec3(0.0), vec3(float(LIGHT_GRID_GROUPS_PER_SIDE - 1u)));
+    uvec3 i = uvec3(g);
+    return (i.z * LIGHT_GRID_GROUPS_PER_SIDE + i.y) * LIGHT_GRID_GROUPS_PER_SIDE + i.x;
+}
+
+// The index into light_grid_visibility of light at point q seen from point p; false where p is
+// outside the grid.
+bool light_grid_point_key(vec3 p, vec3 q, out uint key) {
+    uint index;
+    key = 0u;
+    if (!light_grid_cell_index(p, index)) return false;
+    key = index * light_grid.group_count + light_grid_group_at(q);
+    return true;
+}
+
+// light_grid_seen for an emitter's point q seen from p.
+float light_grid_seen_point(vec3 p, vec3 q) {
+    uint key;
+    if (!light_grid_point_key(p, q, key)) return 1.0;
+    return light_grid_visibility_factor(light_grid_visibility[key]);
+}
+
 #ifdef LIGHT_GRID_LEARN
+void light_grid_count(uint key, bool reached) {
+    atomicAdd(light_grid_visibility[key].rays, 1u);
+    if (!reached) atomicAdd(light_grid_visibility[key].blocked, 1u);
+}
+
 // Counts a shadow ray from point p toward punctual light `light`, and whether it reached it,
 // for p's cell and the light's group.
 void light_grid_learn(vec3 p, uint light, bool reached) {
     uint key;
-    if (!light_grid_visibility_key(p, light, key)) return;
-    atomicAdd(light_grid_visibility[key].rays, 1u);
-    if (!reached) atomicAdd(light_grid_visibility[key].blocked, 1u);
+    if (light_grid_visibility_key(p, light, key)) light_grid_count(key, reached);
+}
+
+// The same for a shadow ray from p toward an emitter's point q.
+void light_grid_learn_point(vec3 p, vec3 q, bool reached) {
+    uint key;
+    if (light_grid_point_key(p, q, key)) light_grid_count(key, reached);
 }
 #endif
 

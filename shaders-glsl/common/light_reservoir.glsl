@@ -14,7 +14,8 @@
 // - Target p_hat: the luminance of the unshadowed contribution f(v, l) cos Le per unit of u,
 //   so that distance, range, spot cone, the emitter's cosine and area, the surface's cosine
 //   and both lobes steer the choice, times what the light grid has learned of how often the
-//   light's group is seen from the pixel's cell (light_grid_seen). For a triangle Le is its
+//   light's group is seen from the pixel's cell (light_grid_seen; an emissive triangle's group
+//   is the region its sampled point lies in: light_grid_seen_point). For a triangle Le is its
 //   material's emissive factor, without the texture (a texture read per candidate; a target
 //   need only be positive wherever the contribution is), and f only the lobes gi keeps of an
 //   emitter's light: the diffuse one, and the specular one where the surface is rougher than
@@ -165,7 +166,7 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
         float w = 0.0, p_hat = 0.0;
         if (light != NO_LIGHT && pmf > 0.0) {
             NeeSample s = reservoir_light_sample(sp, light, u.yz, false);
-            s.seen = seen;
+            s.seen = emitter ? light_grid_seen_point(sp.origin, sp.origin + s.dir * s.dist) : seen;
             p_hat = reservoir_target(sp, s, emitter);
             w = p_hat / pmf;
         }
@@ -240,7 +241,7 @@ LightReservoir reservoir_unpack(vec4 texel, ShadingPoint sp) {
     r.light = light;
     r.u = unpackUnorm2x16(floatBitsToUint(texel.w));
     NeeSample s = reservoir_light_sample(sp, light, r.u, false);
-    s.seen = emitter ? 1.0 : light_grid_seen(sp.origin, light);
+    s.seen = emitter ? light_grid_seen_point(sp.origin, sp.origin + s.dir * s.dist) : light_grid_seen(sp.origin, light);
     r.p_hat = reservoir_target(sp, s, emitter);
     r.w_sum = r.p_hat * texel.y * r.m;
     return r;

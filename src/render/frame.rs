@@ -39,9 +39,9 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows, plan.tinted_shadows)?;
     passes.extend(shadows.passes);
     kept.extend(shadows.kept);
-    // gi's shadow rays toward the resampled lights teach the light grid what its cells see; the
-    // update comes before any pass draws from the grid.
-    if plan.gi && plan.resampled_lights > 0 && settings.light_grid {
+    // gi's shadow rays toward the resampled lights and the emitters teach the light grid what
+    // its cells see; the update comes before any pass draws from the grid.
+    if plan.gi && plan.reservoirs() && settings.light_grid {
         passes.push(Box::new(passes::light_grid_update::new(b)?));
     }
     // The cache answers where gi's and the reflections' rays end; with it off they trace on.

@@ -106,19 +106,13 @@ impl LightGrid {
         resolution: u32,
         capacity: usize,
     ) -> Option<Self> {
-        let (lo, hi) = bounds;
-        let extent = hi - lo;
-        if lights.len() <= first || !extent.is_finite() || extent.max_element() <= 0.0 {
+        if lights.len() <= first {
             return Some(Self::default());
         }
-        // Padded so that points on the bounds, and the shadow rays' offset origins just off
-        // them, fall inside.
-        let pad = Vec3::splat(1e-3 * extent.max_element() + 1e-4);
-        let (lo, hi) = (lo - pad, hi + pad);
-        let extent = hi - lo;
-        let cell = extent.max_element() / resolution.max(1) as f32;
-        let dims = (extent / cell).ceil().as_uvec3().clamp(UVec3::ONE, UVec3::splat(resolution.max(1)));
-        let size = extent / dims.as_vec3();
+        let Some(Layout { lo, size, dims }) = Layout::over(bounds, resolution) else {
+            return Some(Self::default());
+        };
+        let extent = size * dims.as_vec3();
         let cell_count = (dims.x * dims.y * dims.z) as usize;
         let scene_radius = 0.5 * extent.length();
         let half_diagonal_sq = (0.5 * size).length_squared();
@@ -158,15 +152,13 @@ impl LightGrid {
             }
         }
 
-        let group_size = extent / GROUPS_PER_SIDE as f32;
+        let header = Layout { lo, size, dims }.header();
         let group_of = |light: &GpuLight| {
             if light.kind == LIGHT_DIRECTIONAL {
-                return GROUP_COUNT - 1;
+                GROUP_COUNT - 1
+            } else {
+                group_at(&header, Vec3::from(light.position))
             }
-            let max = (GROUPS_PER_SIDE - 1) as f32;
-            let g = ((Vec3::from(light.position) - lo) / group_size).floor().clamp(Vec3::ZERO, Vec3::splat(max));
-            let g = g.as_uvec3();
-            (g.z * GROUPS_PER_SIDE + g.y) * GROUPS_PER_SIDE + g.x
         };
         let mut cells = Vec::with_capacity(cell_count);
         let mut entries = Vec::new();
@@ -181,15 +173,20 @@ impl LightGrid {
                 entries.push(GpuLightGridEntry { light, cdf, pmf: (w as f64 / total) as f32, bound: w, group });
             }
         }
-        let header = GpuLightGridHeader {
-            lo: lo.to_array(),
-            cell_count: cell_count as u32,
-            inv_cell: (1.0 / size).to_array(),
-            group_count: GROUP_COUNT,
-            dims: dims.to_array(),
-            pad1: 0,
-        };
         Some(Self { header, cells, entries })
+    }
+
+    /// A grid whose cells list no light, at `resolution` over `bounds`: where no punctual light
+    /// is resampled but emissive triangles are, the cells and groups are still where gi learns
+    /// what each cell sees of them (common/light_grid.glsl, light_grid_learn_point). Empty when
+    /// the bounds are degenerate.
+    pub fn cells_only(bounds: (Vec3, Vec3), resolution: u32) -> Self {
+        let Some(layout) = Layout::over(bounds, resolution) else {
+            return Self::default();
+        };
+        let header = layout.header();
+        let cells = vec![[0, 0]; header.cell_count as usize];
+        Self { header, cells, entries: Vec::new() }
     }
 
     /// The grid at the finest resolution (from `resolution` down by halves) whose entries fit
@@ -210,6 +207,55 @@ impl LightGrid {
                 return grid;
             }
             res /= 2;
+        }
+    }
+}
+
+/// The group of a light at `q` in the grid of `header`: the region of the bounds it lies in,
+/// GROUPS_PER_SIDE to a side (directional lights have a group of their own). Computed from the
+/// header alone, as light_grid_group_at in common/light_grid.glsl does for an emissive
+/// triangle's point.
+pub fn group_at(header: &GpuLightGridHeader, q: Vec3) -> u32 {
+    let group_size = UVec3::from(header.dims).as_vec3() / (Vec3::from(header.inv_cell) * GROUPS_PER_SIDE as f32);
+    let max = (GROUPS_PER_SIDE - 1) as f32;
+    let g = ((q - Vec3::from(header.lo)) / group_size).floor().clamp(Vec3::ZERO, Vec3::splat(max)).as_uvec3();
+    (g.z * GROUPS_PER_SIDE + g.y) * GROUPS_PER_SIDE + g.x
+}
+
+/// Where a grid's cells are: its padded lower corner, a cell's size and the cells per side.
+struct Layout {
+    lo: Vec3,
+    size: Vec3,
+    dims: UVec3,
+}
+
+impl Layout {
+    /// `resolution` cells along the longest side of `bounds`, as many of the same size as the
+    /// other sides need; None for degenerate bounds.
+    fn over(bounds: (Vec3, Vec3), resolution: u32) -> Option<Self> {
+        let (lo, hi) = bounds;
+        let extent = hi - lo;
+        if !extent.is_finite() || extent.max_element() <= 0.0 {
+            return None;
+        }
+        // Padded so that points on the bounds, and the shadow rays' offset origins just off
+        // them, fall inside.
+        let pad = Vec3::splat(1e-3 * extent.max_element() + 1e-4);
+        let (lo, hi) = (lo - pad, hi + pad);
+        let extent = hi - lo;
+        let cell = extent.max_element() / resolution.max(1) as f32;
+        let dims = (extent / cell).ceil().as_uvec3().clamp(UVec3::ONE, UVec3::splat(resolution.max(1)));
+        Some(Self { lo, size: extent / dims.as_vec3(), dims })
+    }
+
+    fn header(&self) -> GpuLightGridHeader {
+        GpuLightGridHeader {
+            lo: self.lo.to_array(),
+            cell_count: self.dims.x * self.dims.y * self.dims.z,
+            inv_cell: (1.0 / self.size).to_array(),
+            group_count: GROUP_COUNT,
+            dims: self.dims.to_array(),
+            pad1: 0,
         }
     }
 }
@@ -368,6 +414,26 @@ mod tests {
             assert_eq!(e.group, group(e.light));
             assert!(e.bound > 0.0);
         }
+    }
+
+    /// With no resampled punctual light the grid still has its cells (emitters learn in
+    /// them), listing nothing, where a grid of lights would have them; and group_at, which the
+    /// shaders mirror for emitters' points, agrees with the groups the lights were given.
+    #[test]
+    fn a_grid_without_lights_keeps_the_cells_and_groups() {
+        let bounds = (Vec3::ZERO, Vec3::new(16.0, 4.0, 8.0));
+        let lights = vec![point(Vec3::splat(1.0), 0.0), point(Vec3::new(15.0, 3.0, 1.0), 0.0)];
+        let with = LightGrid::build(&lights, &[1.0; 2], 0, bounds, RESOLUTION, usize::MAX).unwrap();
+        let without = LightGrid::cells_only(bounds, RESOLUTION);
+        assert_eq!(bytemuck::bytes_of(&with.header), bytemuck::bytes_of(&without.header));
+        assert_eq!(without.cells.len(), without.header.cell_count as usize);
+        assert!(without.cells.iter().all(|c| c[1] == 0) && without.entries.is_empty());
+        for (i, light) in lights.iter().enumerate() {
+            let e = with.entries.iter().find(|e| e.light == i as u32).unwrap();
+            assert_eq!(e.group, group_at(&without.header, Vec3::from(light.position)));
+        }
+        assert_ne!(group_at(&without.header, Vec3::splat(1.0)), group_at(&without.header, Vec3::new(15.0, 3.0, 1.0)));
+        assert_eq!(LightGrid::cells_only((Vec3::ONE, Vec3::ONE), RESOLUTION).header.cell_count, 0);
     }
 
     #[test]

@@ -124,6 +124,9 @@ pub struct LightTables {
     /// Off (`Settings::light_grid`): the grid stays empty and every point draws the resampled
     /// lights by power from all of them.
     grid_enabled: bool,
+    /// Some triangle emits: the grid keeps its cells, where gi learns what each sees of the
+    /// emitters, even when no punctual light is resampled.
+    emitters_present: bool,
     /// Instances whose material emits, and their transforms when the table was last built.
     emissive: Vec<u32>,
     built_for: Option<Vec<Mat4>>,
@@ -174,16 +177,10 @@ impl LightTables {
         // rarely need a coarser grid, up to MAX_ENTRIES; and at least for every resampled light
         // once (one cell).
         // (None with the grid off: it stays empty.)
+        let emitters_present = emitter_count > 0;
         let grid_at_load = grid_enabled.then(|| {
             let (lights, bounds) = (super::scene_gpu::gpu_lights(scene, pose), scene.bounds(pose));
-            let grid = LightGrid::build_within(
-                &lights,
-                &punctual_powers,
-                SHADOWED_LIGHTS,
-                bounds,
-                light_grid::RESOLUTION,
-                light_grid::MAX_ENTRIES,
-            );
+            let grid = build_grid(&lights, &punctual_powers, bounds, light_grid::MAX_ENTRIES, emitters_present);
             (lights, bounds, grid)
         });
         let at_load_entries = grid_at_load.as_ref().map_or(0, |(_, _, grid)| grid.entries.len());
@@ -214,6 +211,7 @@ impl LightTables {
             grid_header: GpuLightGridHeader::default(),
             grid_at_load,
             grid_enabled,
+            emitters_present,
             emissive: emissive_instances(scene),
             built_for: None,
             punctual_powers,
@@ -257,14 +255,7 @@ impl LightTables {
             {
                 grid
             }
-            _ => LightGrid::build_within(
-                lights,
-                &self.punctual_powers,
-                SHADOWED_LIGHTS,
-                bounds,
-                light_grid::RESOLUTION,
-                self.grid_capacity,
-            ),
+            _ => build_grid(lights, &self.punctual_powers, bounds, self.grid_capacity, self.emitters_present),
         };
         log::debug!(
             "light grid: {:?} cells, {} entries for {} resampled lights",
@@ -404,6 +395,13 @@ pub fn emitters(scene: &Scene, pose: &Pose) -> Vec<GpuEmitter> {
         }
     }
     out
+}
+
+/// The light grid for the punctual lights past the shadowed ones, within `capacity` entries;
+/// with none of them resampled, cells without lights where `emitters` (see LightTables).
+fn build_grid(lights: &[GpuLight], powers: &[f32], bounds: (Vec3, Vec3), capacity: usize, emitters: bool) -> LightGrid {
+    let grid = LightGrid::build_within(lights, powers, SHADOWED_LIGHTS, bounds, light_grid::RESOLUTION, capacity);
+    if grid.header.cell_count == 0 && emitters { LightGrid::cells_only(bounds, light_grid::RESOLUTION) } else { grid }
 }
 
 fn emitter_power(scene: &Scene, e: &GpuEmitter) -> f32 {
