@@ -1,6 +1,7 @@
 //! light_grid_update: before the frame's rays, teaches the light grid what its cells see
 //! (shaders-glsl/light_grid_update.comp). gi counted last frame's shadow rays per cell and
-//! group of resampled lights; this pass folds the counts into each cell's visibility estimate
+//! group of resampled lights (an emissive triangle's point counts in the group of the region
+//! it lies in); this pass folds the counts into each cell's visibility estimate
 //! of each group and rebuilds the cells' CDFs over bound x visibility, so a cell stops spending
 //! its draws on lights behind a wall (src/world/light_grid.rs says why the grid alone cannot
 //! tell).

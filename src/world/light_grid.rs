@@ -24,7 +24,11 @@
 //! `light_grid_update` pass (src/passes/light_grid_update.rs) reweighs each entry by its
 //! group's visibility from the cell before the next frame draws from it. A group pools the rays
 //! of its lights, since one light among hundreds is drawn too rarely to be learned alone. A
-//! listed light keeps at least a hundredth of its bound, so the choice stays unbiased.
+//! listed light keeps at least a hundredth of its bound, so the choice stays unbiased. The
+//! emissive triangles are not listed, but a shadow ray toward one counts in the group of the
+//! region its sampled point lies in ([`group_at`]), and their resampling targets take that
+//! group's factor; a scene whose only resampled lights are emitters gets a grid of empty cells
+//! for it ([`LightGrid::cells_only`]).
 
 use super::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
 use bytemuck::{Pod, Zeroable};
