@@ -310,22 +310,7 @@ fn the_light_grid_learns_that_the_wall_hides_the_other_room() {
     let ctx = common::validated_context();
     for backend in backends(&ctx) {
         let mut r = common::renderer(&ctx, many_lights(), settings(true), backend);
-        common::render_frames(&mut r, LEARNING_FRAMES);
-        let (before, own_min) = learned(&mut r);
-        let hidden_mean = mean(&before);
-        eprintln!(
-            "{backend:?}: {} (camera cell, hidden group) pairs tested, mean estimate {hidden_mean:.4}; least \
-             estimate of a camera-room group {own_min:.4}",
-            before.len(),
-        );
-        assert!(before.len() > 100, "{backend:?}: only {} (cell, hidden group) pairs were tested", before.len());
-        // An estimate falls as 4 / (4 + n) with n rays blocked, and at 64x64 a (cell, group)
-        // pair gets a few a frame. A ray that got through would put it near 1.
-        assert!(hidden_mean < 0.5, "{backend:?}: the hidden room's groups are still taken as seen: {hidden_mean}");
-        assert!(
-            own_min > 0.99,
-            "{backend:?}: a camera-room group is taken as hidden from a camera-room cell: {own_min}"
-        );
+        let hidden_mean = learns_the_wall(&mut r, &format!("{backend:?}, lights"));
 
         // The hidden room's lights dim: the grid is rebuilt over the same cells and keeps what
         // it learned (reset, one frame's rays would leave the estimates near 1).
@@ -355,22 +340,29 @@ fn the_light_grid_learns_which_panels_the_wall_hides() {
     let ctx = common::validated_context();
     for backend in backends(&ctx) {
         let mut r = common::renderer(&ctx, many_panels(), settings(true), backend);
-        common::render_frames(&mut r, LEARNING_FRAMES);
-        let (hidden, own_min) = learned(&mut r);
-        let hidden_mean = mean(&hidden);
-        eprintln!(
-            "{backend:?}: panels, {} (camera cell, hidden group) pairs tested, mean estimate {hidden_mean:.4}; \
-             least estimate of a camera-room group {own_min:.4}",
-            hidden.len(),
-        );
-        assert!(hidden.len() > 100, "{backend:?}: only {} (cell, hidden group) pairs were tested", hidden.len());
-        assert!(hidden_mean < 0.5, "{backend:?}: the hidden room's panels are still taken as seen: {hidden_mean}");
-        assert!(
-            own_min > 0.99,
-            "{backend:?}: a camera-room group is taken as hidden from a camera-room cell: {own_min}"
-        );
+        learns_the_wall(&mut r, &format!("{backend:?}, panels"));
     }
     common::assert_validation_clean(ctx);
+}
+
+/// Renders LEARNING_FRAMES frames and checks what the light grid learned (`learned`): more
+/// than 100 (camera cell, hidden group) pairs tested, their mean estimate under 0.5 (it falls
+/// as 4 / (4 + n) with n rays blocked, and at 64x64 a pair gets a few rays a frame; a ray that
+/// got through would put it near 1), every camera-room group seen from the camera room's cells.
+/// Returns that mean.
+fn learns_the_wall(r: &mut hybrid_rt::render::Renderer, what: &str) -> f64 {
+    common::render_frames(r, LEARNING_FRAMES);
+    let (hidden, own_min) = learned(r);
+    let hidden_mean = mean(&hidden);
+    eprintln!(
+        "{what}: {} (camera cell, hidden group) pairs tested, mean estimate {hidden_mean:.4}; least estimate of a \
+         camera-room group {own_min:.4}",
+        hidden.len(),
+    );
+    assert!(hidden.len() > 100, "{what}: only {} (cell, hidden group) pairs were tested", hidden.len());
+    assert!(hidden_mean < 0.5, "{what}: the hidden room's groups are still taken as seen: {hidden_mean}");
+    assert!(own_min > 0.99, "{what}: a camera-room group is taken as hidden from a camera-room cell: {own_min}");
+    hidden_mean
 }
 
 /// What the light grid has learned, from the cells wholly on the camera's side of the wall:
