@@ -198,10 +198,9 @@ fn light_off() {
 /// brighter lights behind the room's back wall take the shadows chain. Measured (2026-12-04,
 /// both backends alike): a moved light's first frame misses 0.097 of the step denoised (0.045
 /// with gi at full rate; the chain's light: 0.042) and the raw frame keeps 0.12 of it for two
-/// frames, the same at full rate and without the light grid's visibility, so neither the
-/// reservoirs (one resampled light: every candidate is the same light, the weight exactly 1)
-/// nor gi's half rate hold it; where it is held is not found (README, under the stability
-/// table). A light switched off: denoised 0.0004, raw 0.025, 0 frames. Bounds 0.13 and 0.16
+/// frames (at full rate 0.092, the same two frames high), so neither the reservoirs (one
+/// resampled light: every candidate is the same light, the weight exactly 1) nor gi's half
+/// rate hold it; where it is held is not found (README, under the stability table). A light switched off: denoised 0.0004, raw 0.025, 0 frames. Bounds 0.13 and 0.16
 /// for the moved light's first frame, 2 frames of lag both ways; the switched light's as for
 /// `light_off`.
 #[test]
