@@ -298,13 +298,13 @@ fn mean_luminance_matches_the_reference() {
 const LEARNING_FRAMES: u32 = 32;
 
 /// What the light grid learns (`light_grid_update.visibility`, one row per cell, one column per
-/// light group): after LEARNING_FRAMES frames, from the cells wholly on the camera's side of
-/// the wall, the groups of lights wholly behind it that shadow rays tested have been found
-/// hidden, and the camera room's own groups seen by every ray. Lights are grouped by position on a 4 x 4 x 4 grid over the bounds, so
-/// groups 0-1 along x lie in the camera's room and 2-3 behind the wall. A group that no ray from
-/// a cell has tested keeps the estimate 1; the test needs the hidden ones tested. Then the hidden
-/// room's lights dim, which rebuilds the grid over the same cells: what was learned stays. On
-/// both backends.
+/// light group): after LEARNING_FRAMES frames, from the cells wholly on the camera's side of the
+/// wall, the groups of lights wholly behind it that shadow rays tested have been found hidden, and
+/// the camera room's own groups seen by every ray. Lights are grouped by position on a 4 x 4 x 4
+/// grid over the bounds, so groups 0-1 along x lie in the camera's room and 2-3 behind the wall. A
+/// group that no ray from a cell has tested keeps the estimate 1; the test needs the hidden ones
+/// tested. Then the hidden room's lights dim, which rebuilds the grid over the same cells: what was
+/// learned stays. On both backends.
 #[test]
 fn the_light_grid_learns_that_the_wall_hides_the_other_room() {
     let ctx = common::validated_context();

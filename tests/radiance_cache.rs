@@ -223,11 +223,11 @@ fn half_rate_gi_fill_takes_the_mean_of_traced_neighbours() {
     common::assert_validation_clean(ctx);
 }
 
-/// Measured (lavapipe, 2026-12-04, gi at half rate): cache on 0.9877, cache off 0.725 since
-/// the emitters joined gi's reservoirs (0.9976 and 0.730 before; 0.9995 and 0.734 with the exact give-back alone; 2026-12-03: 0.9966; 0.9915 with an established
-/// history's outlier bound at 4 sigma, 0.989 before the clamp kept the fireflies' light)
-/// (0.985 at full rate; 0.977
-/// before young cells traced deep), cache off 0.726 (one bounce). Bound 3%.
+/// Measured (lavapipe, 2026-12-04, gi at half rate): cache on 0.9877, cache off 0.725 since the
+/// emitters joined gi's reservoirs (0.9976 and 0.730 before; 0.9995 and 0.734 with the exact
+/// give-back alone; 2026-12-03: 0.9966; 0.9915 with an established history's outlier bound at 4
+/// sigma, 0.989 before the clamp kept the fireflies' light) (0.985 at full rate; 0.977 before young
+/// cells traced deep), cache off 0.726 (one bounce). Bound 3%.
 #[test]
 fn diffuse_box_converges_to_mitsubas_energy() {
     check_energy("diffuse_box", 0.03, true);

@@ -194,15 +194,15 @@ fn light_off() {
     run("light off", stability::light_off);
 }
 
-/// `moving_light` and `light_off` with the two lights resampled in gi's reservoirs: four
-/// brighter lights behind the room's back wall take the shadows chain. Measured (2026-12-04,
-/// both backends alike): a moved light's first frame misses 0.097 of the step denoised (0.045
-/// with gi at full rate; the chain's light: 0.042) and the raw frame keeps 0.12 of it for two
-/// frames (at full rate 0.092, the same two frames high), so neither the reservoirs (one
-/// resampled light: every candidate is the same light, the weight exactly 1) nor gi's half
-/// rate hold it; where it is held is not found (README, under the stability table). A light switched off: denoised 0.0004, raw 0.025, 0 frames. Bounds 0.13 and 0.16
-/// for the moved light's first frame, 2 frames of lag both ways; the switched light's as for
-/// `light_off`.
+/// `moving_light` and `light_off` with the two lights resampled in gi's reservoirs: four brighter
+/// lights behind the room's back wall take the shadows chain. Measured (2026-12-04, both backends
+/// alike): a moved light's first frame misses 0.097 of the step denoised (0.045 with gi at full
+/// rate; the chain's light: 0.042) and the raw frame keeps 0.12 of it for two frames (at full rate
+/// 0.092, the same two frames high), so neither the reservoirs (one resampled light: every
+/// candidate is the same light, the weight exactly 1) nor gi's half rate hold it; where it is held
+/// is not found (README, under the stability table). A light switched off: denoised 0.0004, raw
+/// 0.025, 0 frames. Bounds 0.13 and 0.16 for the moved light's first frame, 2 frames of lag both
+/// ways; the switched light's as for `light_off`.
 #[test]
 fn resampled_lights_follow_a_move_and_a_switch() {
     let scene = hybrid_rt::scene::builtin_stability::lights_resampled();
@@ -257,18 +257,18 @@ fn grazing_floor() {
     run("grazing floor", stability::grazing_floor);
 }
 
-/// Metrics: fraction of pixels over 10x their 5x5 median, and the peak-to-mean ratio, in a
-/// room lit only through the hot spot of a tiny very bright emitter. Measured: denoised 0 and
-/// 25 (31 before the clamp kept the fireflies' light, 2026-12-03; 28 since), raw 0.092 and 458
-/// (0.104 and 425 since path vertices take caustics through specular surfaces, sampled as
-/// sparks; 0.114 and 528 since the emitters joined gi's reservoirs, 2026-12-04, and the
-/// denoised peak 7: the raw count rose at the other sizes tried too, 0.098 -> 0.103 at 56x56
-/// and 0.102 -> 0.114 at 64x64, not explained; the emitter faces the ceiling, away from
-/// every surface in view). Without the radiance cache raw measured 0.011: with it a pixel shows
-/// its gi ray's cell, and after 8 frames a cell holds at most 8 cosine samples, the lucky ones
-/// of which saw the hot spot (0.043 after 32 frames, as the cells fill). Bounds 0.002 and 100
-/// denoised, 0.15 and 5000 raw (0.12 until the count reached 0.114) (a peak is one sample's luck). The denoiser must remove at least
-/// 80 % of the raw frame's fireflies.
+/// Metrics: fraction of pixels over 10x their 5x5 median, and the peak-to-mean ratio, in a room lit
+/// only through the hot spot of a tiny very bright emitter. Measured: denoised 0 and 25 (31 before
+/// the clamp kept the fireflies' light, 2026-12-03; 28 since), raw 0.092 and 458 (0.104 and 425
+/// since path vertices take caustics through specular surfaces, sampled as sparks; 0.114 and 528
+/// since the emitters joined gi's reservoirs, 2026-12-04, and the denoised peak 7: the raw count
+/// rose at the other sizes tried too, 0.098 -> 0.103 at 56x56 and 0.102 -> 0.114 at 64x64, not
+/// explained; the emitter faces the ceiling, away from every surface in view). Without the radiance
+/// cache raw measured 0.011: with it a pixel shows its gi ray's cell, and after 8 frames a cell
+/// holds at most 8 cosine samples, the lucky ones of which saw the hot spot (0.043 after 32 frames,
+/// as the cells fill). Bounds 0.002 and 100 denoised, 0.15 and 5000 raw (0.12 until the count
+/// reached 0.114) (a peak is one sample's luck). The denoiser must remove at least 80 % of the raw
+/// frame's fireflies.
 #[test]
 fn fireflies() {
     let (denoised, raw) = run("fireflies", stability::fireflies);
