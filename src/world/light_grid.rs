@@ -113,9 +113,11 @@ impl LightGrid {
         if lights.len() <= first {
             return Some(Self::default());
         }
-        let Some(Layout { lo, size, dims }) = Layout::over(bounds, resolution) else {
+        let Some(layout) = Layout::over(bounds, resolution) else {
             return Some(Self::default());
         };
+        let header = layout.header();
+        let Layout { lo, size, dims } = layout;
         let extent = size * dims.as_vec3();
         let cell_count = (dims.x * dims.y * dims.z) as usize;
         let scene_radius = 0.5 * extent.length();
@@ -156,7 +158,6 @@ impl LightGrid {
             }
         }
 
-        let header = Layout { lo, size, dims }.header();
         let group_of = |light: &GpuLight| {
             if light.kind == LIGHT_DIRECTIONAL {
                 GROUP_COUNT - 1

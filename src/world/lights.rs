@@ -124,9 +124,6 @@ pub struct LightTables {
     /// Off (`Settings::light_grid`): the grid stays empty and every point draws the resampled
     /// lights by power from all of them.
     grid_enabled: bool,
-    /// Some triangle emits: the grid keeps its cells, where gi learns what each sees of the
-    /// emitters, even when no punctual light is resampled.
-    emitters_present: bool,
     /// Instances whose material emits, and their transforms when the table was last built.
     emissive: Vec<u32>,
     built_for: Option<Vec<Mat4>>,
@@ -177,10 +174,9 @@ impl LightTables {
         // rarely need a coarser grid, up to MAX_ENTRIES; and at least for every resampled light
         // once (one cell).
         // (None with the grid off: it stays empty.)
-        let emitters_present = emitter_count > 0;
         let grid_at_load = grid_enabled.then(|| {
             let (lights, bounds) = (super::scene_gpu::gpu_lights(scene, pose), scene.bounds(pose));
-            let grid = build_grid(&lights, &punctual_powers, bounds, light_grid::MAX_ENTRIES, emitters_present);
+            let grid = build_grid(&lights, &punctual_powers, bounds, light_grid::MAX_ENTRIES, emitter_count > 0);
             (lights, bounds, grid)
         });
         let at_load_entries = grid_at_load.as_ref().map_or(0, |(_, _, grid)| grid.entries.len());
@@ -211,7 +207,6 @@ impl LightTables {
             grid_header: GpuLightGridHeader::default(),
             grid_at_load,
             grid_enabled,
-            emitters_present,
             emissive: emissive_instances(scene),
             built_for: None,
             punctual_powers,
@@ -255,7 +250,7 @@ impl LightTables {
             {
                 grid
             }
-            _ => build_grid(lights, &self.punctual_powers, bounds, self.grid_capacity, self.emitters_present),
+            _ => build_grid(lights, &self.punctual_powers, bounds, self.grid_capacity, !self.emissive.is_empty()),
         };
         log::debug!(
             "light grid: {:?} cells, {} entries for {} resampled lights",
@@ -398,7 +393,8 @@ pub fn emitters(scene: &Scene, pose: &Pose) -> Vec<GpuEmitter> {
 }
 
 /// The light grid for the punctual lights past the shadowed ones, within `capacity` entries;
-/// with none of them resampled, cells without lights where `emitters` (see LightTables).
+/// with none of them resampled, cells without lights where `emitters`: gi learns in them what
+/// each cell sees of the emissive triangles.
 fn build_grid(lights: &[GpuLight], powers: &[f32], bounds: (Vec3, Vec3), capacity: usize, emitters: bool) -> LightGrid {
     let grid = LightGrid::build_within(lights, powers, SHADOWED_LIGHTS, bounds, light_grid::RESOLUTION, capacity);
     if grid.header.cell_count == 0 && emitters { LightGrid::cells_only(bounds, light_grid::RESOLUTION) } else { grid }
