@@ -473,7 +473,9 @@ fn moving_light_in(rig: &Rig, mut scene: Scene, denoised: bool, resampled: bool)
     let (first, lag) = step_response(&mut r, |_| {}, |i| i % width < width / 2)?;
     // The raw frame shows the whole step at once; what it reads is its one-frame noise against
     // the step (0.024 with gi at full rate, 0.080 at half rate: half the samples a frame). A
-    // resampled light's frame keeps 0.12 of the step for two frames (tests/stability.rs).
+    // resampled light's frame reads 0.12 of the step high for two frames: noise, which the
+    // radiance cache correlates over frames, against an end value that is itself noisy (README,
+    // tests/stability.rs).
     let (first_bound, lag_bound) = match (resampled, denoised) {
         (false, true) => (0.06, 2.0),
         (false, false) => (0.12, 0.0),
