@@ -6,6 +6,10 @@
 // see: a wall between a cell and a room full of lights without a range leaves those listed
 // (the grid knows only distances) but rarely drawn.
 //
+// And it rebuilds the cell's CDF over the groups the emissive triangles are sorted into, by
+// each group's share of their power x the cell's visibility factor for it: gi draws an emitter
+// candidate's group from it (light_grid_emitter_pick).
+//
 // It also writes what it learned as an image, for dumps: row c holds cell c's estimate for each
 // group (-1 past the grid's cells).
 #extension GL_GOOGLE_include_directive : require
@@ -41,6 +45,21 @@ void main() {
         }
         imageStore(out_visibility, ivec2(g, c), vec4(1.0 - v.hidden));
     }
+    // The emitters' listed groups, in the cell's first slots. The last one's CDF is exactly 1
+    // (every listed group has power), which is also how gi tells that it was built.
+    uint listed = emitter_group_count;
+    float emitters_total = 0.0;
+    for (uint j = 0u; j < listed; ++j) {
+        EmitterGroup eg = emitter_groups[j];
+        emitters_total += eg.share * light_grid_visibility_factor(light_grid_visibility[c * groups + eg.group]);
+    }
+    float emitters_acc = 0.0;
+    for (uint j = 0u; j < listed; ++j) {
+        EmitterGroup eg = emitter_groups[j];
+        emitters_acc += eg.share * light_grid_visibility_factor(light_grid_visibility[c * groups + eg.group]);
+        light_grid_visibility[c * groups + j].emitters_cdf = j + 1u == listed ? 1.0 : emitters_acc / emitters_total;
+    }
+
     uvec2 cell = light_grid_cells[c];
     uint end = cell.x + cell.y;
     float total = 0.0;

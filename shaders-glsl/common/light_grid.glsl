@@ -16,6 +16,12 @@
 // all its lights: one light among hundreds is drawn too rarely to be learned on its own. Every
 // listed light keeps a share (LIGHT_GRID_VISIBILITY_FLOOR), so the choice and the resampling
 // stay unbiased.
+//
+// The emissive triangles are not listed in the cells; they are sorted into the same groups by
+// where they lie (EmitterGroups, src/world/light_grid.rs), light_grid_update.comp builds per
+// cell a CDF over the groups by their power x the cell's visibility factor, and gi draws an
+// emitter candidate's group from it, then a triangle of the group by power
+// (light_grid_emitter_pick).
 #ifndef LIGHT_GRID_GLSL
 #define LIGHT_GRID_GLSL
 
@@ -50,6 +56,29 @@ struct LightGridVisibility {
     float hidden;
     uint rays;
     uint blocked;
+    // In slot j of a cell: the cell's CDF over the emitters' listed groups up to the j-th
+    // (emitter_groups[j]), by power x visibility; 0 until light_grid_update builds it.
+    float emitters_cdf;
+};
+
+// The groups by position, into which the emissive triangles are sorted. Rust:
+// world::light_grid::EMITTER_GROUPS.
+#define LIGHT_GRID_EMITTER_GROUPS 64u
+
+// A group that holds emitters: its stretch of emitter_group_entries, its share of the
+// emitters' power, and which group it is.
+struct EmitterGroup {
+    uint first;
+    uint count;
+    float share;
+    uint group;
+};
+
+// An emissive triangle of a group, with the group's CDF by power.
+struct EmitterGroupEntry {
+    uint emitter;  // index into emitters[]
+    float cdf;
+    float pmf;
 };
 
 // Light groups along each side of the grid's bounds (the groups by position, then the
@@ -64,6 +93,13 @@ struct LightGridVisibility {
 float light_grid_visibility_factor(LightGridVisibility v) {
     return LIGHT_GRID_VISIBILITY_FLOOR + (1.0 - LIGHT_GRID_VISIBILITY_FLOOR) * (1.0 - v.hidden);
 }
+
+layout(set = 0, binding = 22, scalar) readonly buffer EmitterGroups {
+    uint emitter_group_count;  // the groups listed: those that hold emitters
+    uint emitter_groups_pad[3];
+    EmitterGroup emitter_groups[LIGHT_GRID_EMITTER_GROUPS];
+    EmitterGroupEntry emitter_group_entries[];
+};
 
 // Per cell, (first entry, entry count).
 layout(set = 0, binding = 19, scalar) readonly buffer LightGrid {
@@ -142,6 +178,46 @@ float light_grid_seen(vec3 p, uint light) {
     uint key;
     if (!light_grid_visibility_key(p, light, key)) return 1.0;
     return light_grid_visibility_factor(light_grid_visibility[key]);
+}
+
+// Whether point p lies in a cell of the light grid whose CDF over the emitters' groups
+// light_grid_update has built (`index`: the cell), so that light_grid_emitter_pick can draw
+// there.
+bool light_grid_emitter_cell(vec3 p, out uint index) {
+    uint listed = emitter_group_count;
+    // Built, the CDF ends in exactly 1.
+    return listed > 0u && light_grid_cell_index(p, index) &&
+           light_grid_visibility[index * light_grid.group_count + listed - 1u].emitters_cdf == 1.0;
+}
+
+// An emissive triangle (index into emitters[]) for a point of cell `index` (one that
+// light_grid_emitter_cell found), u in [0, 1): its group by the cell's CDF over the groups
+// (power x what the cell sees of them), then a triangle of the group by power; and the
+// probability of that choice among the emitters (0 and NO_LIGHT should rounding find no
+// triangle).
+uint light_grid_emitter_pick(uint index, float u, out float pmf) {
+    pmf = 0.0;
+    uint base = index * light_grid.group_count;
+    uint lo = 0u;
+    uint hi = emitter_group_count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (light_grid_visibility[base + mid].emitters_cdf > u) hi = mid; else lo = mid + 1u;
+    }
+    float below = lo == 0u ? 0.0 : light_grid_visibility[base + lo - 1u].emitters_cdf;
+    float p_group = light_grid_visibility[base + lo].emitters_cdf - below;
+    EmitterGroup g = emitter_groups[lo];
+    if (!(p_group > 0.0) || g.count == 0u) return NO_LIGHT;
+    // The rest of u picks the triangle.
+    float v = clamp((u - below) / p_group, 0.0, 0.99999994);
+    uint a = g.first;
+    uint b = g.first + g.count - 1u;
+    while (a < b) {
+        uint mid = (a + b) / 2u;
+        if (emitter_group_entries[mid].cdf > v) b = mid; else a = mid + 1u;
+    }
+    pmf = p_group * emitter_group_entries[a].pmf;
+    return emitter_group_entries[a].emitter;
 }
 
 // The group of a light at point q (an emissive triangle's sampled point; the grid's cells list

@@ -7,8 +7,10 @@
 //   triangle's comes after them) and the two numbers u that place a point on it (sphere and
 //   disk lights, triangles; the other lights ignore u), so it means the same thing at any
 //   shading point.
-// - Candidates: RIS_CANDIDATES, each an emissive triangle by power (with the probability of
-//   the emitters' share of the two kinds' power) or a resampled light from the shading point's
+// - Candidates: RIS_CANDIDATES, each an emissive triangle (with the probability of the
+//   emitters' share of the two kinds' power; its group of the light grid by power x what the
+//   point's cell has learned to see of it, then a triangle of the group by power:
+//   light_grid_emitter_pick) or a resampled light from the shading point's
 //   cell of the light grid (common/light_grid.glsl: the resampled lights that reach it, weighed
 //   by what they can deliver there), or by power from all of them outside the grid.
 // - Target p_hat: the luminance of the unshadowed contribution f(v, l) cos Le per unit of u,
@@ -145,8 +147,21 @@ uint emitter_pick(float u, float share, out float pmf) {
     return entry;
 }
 
-// The frame's own reservoir: RIS_CANDIDATES candidates (emissive triangles by power, punctual
-// lights from the light grid), resampled by p_hat.
+// An emissive triangle's entry for u in [0, 1), and the probability of choosing it among
+// them: from the shading point's cell of the light grid by what it sees of each group of them
+// (`in_cell`, `cell`: light_grid_emitter_cell; light_grid_emitter_pick), else (outside the
+// grid, before anything was built, or with all emitters in one group, where that choice is
+// the same) by power.
+uint emitter_pick_at(bool in_cell, uint cell, float u, float share, out float pmf) {
+    if (in_cell) {
+        uint e = light_grid_emitter_pick(cell, u, pmf);
+        if (e != NO_LIGHT) return light_table.first_emitter_entry + e;
+    }
+    return emitter_pick(u, share, pmf);
+}
+
+// The frame's own reservoir: RIS_CANDIDATES candidates (emissive triangles by what the point's
+// cell sees of them, punctual lights from the light grid), resampled by p_hat.
 LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
     LightReservoir r = reservoir_empty();
     ResampledLights lights_here = ResampledLights(false, 0u, uvec2(0u), 0.0, 0.0);
@@ -155,12 +170,14 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
     // The chance that a candidate is a triangle: the emitters' part of the two kinds' power
     // (0 without emitters, which keeps the punctual lights' draws as they were).
     float p_emitter = emitters / (emitters + (lights_here.hi - lights_here.lo));
+    uint emitter_cell;
+    bool in_cell = emitter_group_count > 1u && light_grid_emitter_cell(sp.origin, emitter_cell);
     // Not unrolled: each copy of the body would lengthen a CPU driver's compile.
     [[dont_unroll]] for (uint k = 0u; k < RIS_CANDIDATES; ++k) {
         vec3 u = rng_next3(rng);
         float pmf, seen = 1.0;
         bool emitter = u.x < p_emitter;
-        uint light = emitter ? emitter_pick(u.x / p_emitter, emitters, pmf)
+        uint light = emitter ? emitter_pick_at(in_cell, emitter_cell, u.x / p_emitter, emitters, pmf)
                              : resampled_light_pick(lights_here, (u.x - p_emitter) / (1.0 - p_emitter), pmf, seen);
         pmf *= emitter ? p_emitter : 1.0 - p_emitter;
         float w = 0.0, p_hat = 0.0;

@@ -168,12 +168,13 @@ impl FramePlan {
         if emitters > 0 {
             reasons.push(format!(
                 "emitters: {emitters} emissive triangle(s), resampled in gi{}: per pixel one point on one of \
-                 them from candidates drawn by power and last frame's choice, weighted by their unshadowed \
+                 them from candidates drawn by power{} and last frame's choice, weighted by their unshadowed \
                  contribution{}, with shadow rays",
                 if resampled_lights > 0 { " with the resampled punctual lights" } else { "" },
+                if light_grid { " and by what the light grid's cell sees of the region they are in" } else { "" },
                 if light_grid {
-                    " and by how often gi's shadow rays from the light grid's cell reach the region they are in \
-                     (light_grid_update)"
+                    " and by how often gi's shadow rays from that cell reach that region (learned by \
+                     light_grid_update)"
                 } else {
                     ""
                 }

@@ -27,8 +27,11 @@
 //! listed light keeps at least a hundredth of its bound, so the choice stays unbiased. The
 //! emissive triangles are not listed, but a shadow ray toward one counts in the group of the
 //! region its sampled point lies in ([`group_at`]), and their resampling targets take that
-//! group's factor; a scene whose only resampled lights are emitters gets a grid of empty cells
-//! for it ([`LightGrid::cells_only`]).
+//! group's factor. They are sorted into the groups by their centroids ([`emitter_groups`],
+//! set-0 binding 22), and `light_grid_update` builds per cell a CDF over the groups by power x
+//! visibility, from which gi draws an emitter candidate's group (then a triangle of it by
+//! power): candidates go to the emitters a cell sees. A scene whose only resampled lights are
+//! emitters gets a grid of empty cells for it ([`LightGrid::cells_only`]).
 
 use super::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
 use bytemuck::{Pod, Zeroable};
@@ -87,6 +90,77 @@ pub struct GpuLightGridVisibility {
     pub hidden: f32,
     pub rays: u32,
     pub blocked: u32,
+    /// In slot j of a cell: the cell's CDF over the emitters' listed groups (power x
+    /// visibility) up to the j-th ([`emitter_groups`]), written by light_grid_update; all zeros
+    /// until it runs.
+    pub emitters_cdf: f32,
+}
+
+/// The groups by position, those the emissive triangles are sorted into.
+pub const EMITTER_GROUPS: u32 = GROUPS_PER_SIDE * GROUPS_PER_SIDE * GROUPS_PER_SIDE;
+
+/// Mirrors `EmitterGroup` in common/light_grid.glsl: a group that holds emitters, its stretch
+/// of the emitters sorted by group, and its share of their power.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitterGroup {
+    pub first: u32,
+    pub count: u32,
+    pub share: f32,
+    pub group: u32,
+}
+
+/// Mirrors `EmitterGroupEntry`: an emissive triangle (index into the emitters) with its
+/// group's CDF by power.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitterGroupEntry {
+    pub emitter: u32,
+    pub cdf: f32,
+    pub pmf: f32,
+}
+
+/// The emissive triangles (`emitters[i]`: its centroid and power) sorted into the groups of the
+/// grid of `header` by their centroids: the groups that hold any, each with a CDF by power over
+/// its triangles and its share of the total. gi draws an emitter candidate's group by the
+/// cell's learned CDF over these groups and a triangle of it by power (common/light_grid.glsl,
+/// light_grid_emitter_pick); only the groups that hold emitters are listed, so that a scene
+/// with one lamp pays for one. Where a triangle spans two groups its centroid decides; the
+/// probability of drawing it is the same whatever its group, so this only steers variance.
+/// Nothing when nothing has power or there is no grid.
+pub fn emitter_groups(
+    header: &GpuLightGridHeader,
+    emitters: &[(Vec3, f32)],
+) -> (Vec<GpuEmitterGroup>, Vec<GpuEmitterGroupEntry>) {
+    let clean = |p: f32| if p.is_finite() && p > 0.0 { p as f64 } else { 0.0 };
+    let total: f64 = emitters.iter().map(|e| clean(e.1)).sum();
+    if total <= 0.0 || header.cell_count == 0 {
+        return (Vec::new(), Vec::new());
+    }
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); EMITTER_GROUPS as usize];
+    for (i, &(centroid, power)) in emitters.iter().enumerate() {
+        if clean(power) > 0.0 {
+            members[group_at(header, centroid) as usize].push(i as u32);
+        }
+    }
+    let (mut groups, mut entries) = (Vec::new(), Vec::new());
+    for (group, list) in members.iter().enumerate().filter(|(_, list)| !list.is_empty()) {
+        let power: f64 = list.iter().map(|&i| clean(emitters[i as usize].1)).sum();
+        groups.push(GpuEmitterGroup {
+            first: entries.len() as u32,
+            count: list.len() as u32,
+            share: (power / total) as f32,
+            group: group as u32,
+        });
+        let mut acc = 0.0f64;
+        for (k, &i) in list.iter().enumerate() {
+            let p = clean(emitters[i as usize].1);
+            acc += p;
+            let cdf = if k + 1 == list.len() { 1.0 } else { (acc / power) as f32 };
+            entries.push(GpuEmitterGroupEntry { emitter: i, cdf, pmf: (p / power) as f32 });
+        }
+    }
+    (groups, entries)
 }
 
 /// A built grid: the header, per cell (first entry, entry count), and the entries.
@@ -439,6 +513,31 @@ mod tests {
         }
         assert_ne!(group_at(&without.header, Vec3::splat(1.0)), group_at(&without.header, Vec3::new(15.0, 3.0, 1.0)));
         assert_eq!(LightGrid::cells_only((Vec3::ONE, Vec3::ONE), RESOLUTION).header.cell_count, 0);
+    }
+
+    /// Each group lists its emitters with a CDF by power; the shares sum to 1 and a triangle's
+    /// probability, its group's share times its part of the group, is its part of the total.
+    #[test]
+    fn emitters_are_sorted_into_their_groups_by_power() {
+        let grid = LightGrid::cells_only((Vec3::ZERO, Vec3::new(16.0, 4.0, 8.0)), RESOLUTION);
+        let emitters =
+            [(Vec3::splat(1.0), 1.0), (Vec3::new(15.0, 3.0, 1.0), 2.0), (Vec3::splat(1.2), 3.0), (Vec3::ONE, 0.0)];
+        let (groups, entries) = emitter_groups(&grid.header, &emitters);
+        assert_eq!(groups.len(), 2, "only the groups that hold emitters are listed");
+        assert!((groups.iter().map(|g| g.share).sum::<f32>() - 1.0).abs() < 1e-6);
+        assert_eq!(entries.len(), 3, "the powerless triangle is left out");
+        let group_of = |q: Vec3| groups.iter().find(|g| g.group == group_at(&grid.header, q)).unwrap();
+        for (i, &(centroid, power)) in emitters.iter().enumerate().take(3) {
+            let g = group_of(centroid);
+            let stretch = &entries[g.first as usize..(g.first + g.count) as usize];
+            let e = stretch.iter().find(|e| e.emitter == i as u32).expect("listed in its group");
+            assert!((g.share * e.pmf - power / 6.0).abs() < 1e-6, "emitter {i}");
+            assert_eq!(stretch.last().unwrap().cdf, 1.0);
+        }
+        assert_eq!(group_of(Vec3::splat(1.0)).count, 2, "the two triangles near the corner share a group");
+        // Without a grid, or without power, nothing to draw from.
+        assert!(emitter_groups(&GpuLightGridHeader::default(), &emitters).1.is_empty());
+        assert!(emitter_groups(&grid.header, &[(Vec3::ONE, 0.0)]).1.is_empty());
     }
 
     #[test]

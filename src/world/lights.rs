@@ -1,7 +1,8 @@
 //! The light tables behind Monte Carlo light sampling (shaders-glsl/common/light_sampling.glsl):
 //! the emissive triangles, one CDF over every light by power, and the environment's texels and
 //! CDFs, bound in set 0 at bindings 12..16; and the light grid over the resampled lights
-//! (`light_grid`), at bindings 19 to 21.
+//! (`light_grid`), at bindings 19 to 21, with the emissive triangles sorted into its groups at
+//! binding 22.
 //!
 //! The light grid lives in device-local memory: gi reads its entries for every candidate and
 //! counts into its visibility with atomics, and light_grid_update rewrites the entries' CDFs,
@@ -22,7 +23,10 @@
 //! light that can contribute keeps the estimate unbiased.
 
 use super::environment::{EnvironmentData, luminance};
-use super::light_grid::{self, GpuLightGridEntry, GpuLightGridHeader, GpuLightGridVisibility, LightGrid};
+use super::light_grid::{
+    self, GpuEmitterGroup, GpuEmitterGroupEntry, GpuLightGridEntry, GpuLightGridHeader, GpuLightGridVisibility,
+    LightGrid,
+};
 use super::scene_gpu::{GpuLight, binding};
 use crate::gpu::{
     self, Binding, BindingKind, Buffer, CommandPool, Context, DescriptorSet, MemoryLocation, Recorder,
@@ -44,6 +48,8 @@ pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
 pub const LIGHT_KIND_EMITTER: u32 = 1;
 pub const LIGHT_KIND_ENVIRONMENT: u32 = 2;
 pub const EMITTER_DOUBLE_SIDED: u32 = 1;
+/// Bytes before the emitters' groups at binding 22: their count, padded.
+const EMITTER_GROUPS_HEADER: usize = 16;
 /// `emitter_base` of an instance that emits nothing.
 pub const NO_EMITTER: u32 = u32::MAX;
 
@@ -91,6 +97,7 @@ pub fn bindings() -> Vec<Binding> {
         binding::LIGHT_GRID,
         binding::LIGHT_GRID_ENTRIES,
         binding::LIGHT_GRID_VISIBILITY,
+        binding::EMITTER_GROUPS,
     ]
     .into_iter()
     .map(|b| Binding { binding: b, kind: BindingKind::StorageBuffer, count: 1 })
@@ -113,6 +120,11 @@ pub struct LightTables {
     /// Device-local.
     grid_visibility: Buffer,
     grid_capacity: usize,
+    /// The emissive triangles by the grid's groups (`light_grid::emitter_groups`); rewritten
+    /// when emitters move or the grid's cells do.
+    emitter_groups: StagedBuffer,
+    /// Each emissive triangle's centroid and power, as last built.
+    emitter_points: Vec<(Vec3, f32)>,
     /// Whether the next `record` resets the visibility.
     visibility_reset_pending: bool,
     /// The header of the grid last written (where its cells are).
@@ -183,6 +195,14 @@ impl LightTables {
         let grid_capacity = (2 * at_load_entries).min(light_grid::MAX_ENTRIES).max(scene.lights.len()).max(1);
         let entries_bytes = grid_capacity * size_of::<GpuLightGridEntry>();
         let grid_entries = StagedBuffer::new(ctx, "lights.grid_entries", entries_bytes as u64, storage)?;
+        let emitter_groups = StagedBuffer::new(
+            ctx,
+            "lights.emitter_groups",
+            (EMITTER_GROUPS_HEADER
+                + light_grid::EMITTER_GROUPS as usize * size_of::<GpuEmitterGroup>()
+                + emitter_count.max(1) as usize * size_of::<GpuEmitterGroupEntry>()) as u64,
+            storage,
+        )?;
         let visibility_count =
             if grid_enabled { light_grid::RESOLUTION.pow(3) * light_grid::GROUP_COUNT } else { 1 } as usize;
         let grid_visibility = Buffer::new(
@@ -202,6 +222,8 @@ impl LightTables {
             grid_entries,
             grid_visibility,
             grid_capacity,
+            emitter_groups,
+            emitter_points: Vec::new(),
             // The device-local buffer starts undefined.
             visibility_reset_pending: true,
             grid_header: GpuLightGridHeader::default(),
@@ -227,6 +249,7 @@ impl LightTables {
         set.write_buffer(binding::LIGHT_GRID, BindingKind::StorageBuffer, self.grid.buffer());
         set.write_buffer(binding::LIGHT_GRID_ENTRIES, BindingKind::StorageBuffer, self.grid_entries.buffer());
         set.write_buffer(binding::LIGHT_GRID_VISIBILITY, BindingKind::StorageBuffer, &self.grid_visibility);
+        set.write_buffer(binding::EMITTER_GROUPS, BindingKind::StorageBuffer, self.emitter_groups.buffer());
     }
 
     /// Where the light grid's cells are (no cells: no grid), as last written.
@@ -264,10 +287,22 @@ impl LightTables {
         // one frame's rays correct it (light_grid_update's memory is 4 rays). Otherwise it
         // belonged to the old cells. An animated light rebuilds the grid every frame, and would
         // never learn anything if each rebuild forgot.
-        if bytemuck::bytes_of(&grid.header) != bytemuck::bytes_of(&self.grid_header) {
+        let moved = bytemuck::bytes_of(&grid.header) != bytemuck::bytes_of(&self.grid_header);
+        if moved {
             self.visibility_reset_pending = true;
         }
-        self.stage_grid(&grid.header, &grid.cells, &grid.entries)
+        self.stage_grid(&grid.header, &grid.cells, &grid.entries)?;
+        if moved { self.stage_emitter_groups() } else { Ok(()) }
+    }
+
+    /// Sorts the emissive triangles as last built into the groups of the grid as last written,
+    /// for the next `record` to copy in.
+    fn stage_emitter_groups(&mut self) -> Result<()> {
+        let (groups, entries) = light_grid::emitter_groups(&self.grid_header, &self.emitter_points);
+        let listed = EMITTER_GROUPS_HEADER + light_grid::EMITTER_GROUPS as usize * size_of::<GpuEmitterGroup>();
+        self.emitter_groups.write(0, bytemuck::bytes_of(&[groups.len() as u32, 0, 0, 0]))?;
+        self.emitter_groups.write(EMITTER_GROUPS_HEADER, bytemuck::cast_slice(&groups))?;
+        self.emitter_groups.write(listed, bytemuck::cast_slice(&entries))
     }
 
     /// Writes a grid for the next `record` to copy in.
@@ -289,7 +324,16 @@ impl LightTables {
     /// moved, between barriers against the shaders that read and write them. Nothing is
     /// recorded when nothing is pending.
     pub fn record(&mut self, rec: &Recorder) {
-        staged::record_copies(rec, &mut [&mut self.table, &mut self.emitters, &mut self.grid, &mut self.grid_entries]);
+        staged::record_copies(
+            rec,
+            &mut [
+                &mut self.table,
+                &mut self.emitters,
+                &mut self.grid,
+                &mut self.grid_entries,
+                &mut self.emitter_groups,
+            ],
+        );
         if std::mem::take(&mut self.visibility_reset_pending) {
             let shaders = (
                 vk::PipelineStageFlags2::COMPUTE_SHADER,
@@ -313,8 +357,8 @@ impl LightTables {
         let emitters = emitters(scene, pose);
         let mut powers: Vec<(u32, u32, f32)> = Vec::with_capacity(self.punctual_powers.len() + emitters.len() + 1);
         powers.extend(self.punctual_powers.iter().enumerate().map(|(i, &p)| (LIGHT_KIND_PUNCTUAL, i as u32, p)));
-        powers
-            .extend(emitters.iter().enumerate().map(|(i, e)| (LIGHT_KIND_EMITTER, i as u32, emitter_power(scene, e))));
+        self.emitter_points = emitters.iter().map(|e| (centroid(e), emitter_power(scene, e))).collect();
+        powers.extend(self.emitter_points.iter().enumerate().map(|(i, e)| (LIGHT_KIND_EMITTER, i as u32, e.1)));
         powers.push((LIGHT_KIND_ENVIRONMENT, 0, self.env_power));
         let entries = light_cdf(&powers);
         let (env_width, env_height, env_constant) = self.env_header;
@@ -329,6 +373,7 @@ impl LightTables {
         self.table.write(0, bytemuck::bytes_of(&header))?;
         self.table.write(size_of::<GpuLightTableHeader>(), bytemuck::cast_slice(&entries))?;
         self.emitters.write(0, bytemuck::cast_slice(&emitters))?;
+        self.stage_emitter_groups()?;
         self.built_for = Some(now);
         Ok(true)
     }
@@ -398,6 +443,10 @@ pub fn emitters(scene: &Scene, pose: &Pose) -> Vec<GpuEmitter> {
 fn build_grid(lights: &[GpuLight], powers: &[f32], bounds: (Vec3, Vec3), capacity: usize, emitters: bool) -> LightGrid {
     let grid = LightGrid::build_within(lights, powers, SHADOWED_LIGHTS, bounds, light_grid::RESOLUTION, capacity);
     if grid.header.cell_count == 0 && emitters { LightGrid::cells_only(bounds, light_grid::RESOLUTION) } else { grid }
+}
+
+fn centroid(e: &GpuEmitter) -> Vec3 {
+    Vec3::from(e.p0) + (Vec3::from(e.e1) + Vec3::from(e.e2)) / 3.0
 }
 
 fn emitter_power(scene: &Scene, e: &GpuEmitter) -> f32 {

@@ -49,6 +49,8 @@ pub mod binding {
     pub const LIGHT_GRID_ENTRIES: u32 = 20;
     /// What the hybrid frame learned each cell to see of each group of lights.
     pub const LIGHT_GRID_VISIBILITY: u32 = 21;
+    /// The emissive triangles sorted into the light grid's groups.
+    pub const EMITTER_GROUPS: u32 = 22;
 }
 
 #[repr(C)]
