@@ -7,6 +7,8 @@
 //! | `stability-slide` | camera cut, fast pan, ghosting and disocclusion behind a moving cube |
 //! | `stability-lights` | lag after a light moves and after one switches off |
 //! | `stability-lights-resampled` | the same with both lights resampled (four brighter ones behind the wall) |
+//! | `stability-lights-occluded` | lag after a box closes around a light |
+//! | `stability-lights-occluded-resampled` | the same around a resampled light |
 //! | `stability-leak` | light leaking through a zero-thickness wall into a sealed room |
 //! | `stability-cache-leak` | light leaking through a wall thinner than a radiance-cache cell |
 //! | `stability-grazing` | shadow acne on a floor lit at a grazing angle, shadow terminator |
@@ -26,6 +28,8 @@ pub const NAMES: &[&str] = &[
     "stability-slide",
     "stability-lights",
     "stability-lights-resampled",
+    "stability-lights-occluded",
+    "stability-lights-occluded-resampled",
     "stability-leak",
     "stability-cache-leak",
     "stability-grazing",
@@ -42,6 +46,8 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-slide" => Some(slide()),
         "stability-lights" => Some(lights()),
         "stability-lights-resampled" => Some(lights_resampled()),
+        "stability-lights-occluded" => Some(lights_occluded(false)),
+        "stability-lights-occluded-resampled" => Some(lights_occluded(true)),
         "stability-leak" => Some(leak()),
         "stability-cache-leak" => Some(cache_leak()),
         "stability-grazing" => Some(grazing()),
@@ -216,6 +222,9 @@ pub mod lights_facts {
     /// brightest lights, so those two are resampled in gi (common/light_reservoir.glsl).
     pub const BEHIND: usize = 4;
     pub const BEHIND_POWER: f32 = 4.0;
+    /// In `lights_occluded`, a closed box (half-extent BOX_HALF) jumps at MOVE_TIME from under
+    /// the floor to around `mover`, hiding it from the whole room.
+    pub const BOX_HALF: f32 = 0.25;
 }
 
 /// A white room open toward the camera, lit by two point lights: `mover` jumps from the left
@@ -261,6 +270,35 @@ pub fn lights_resampled() -> Scene {
         let node = s.nodes.len() as u32 - 1;
         s.lights.push(light(&format!("behind {k}"), LightKind::Point, 12.0 * BEHIND_POWER, node));
     }
+    s
+}
+
+/// `lights` (`lights_resampled` where `resampled`) with `mover` staying where it starts and a
+/// box that jumps at MOVE_TIME from under the floor to around `mover`, hiding it from every
+/// point of the room; `switched` still lights it. Unlike a light switched off, nothing about
+/// the lights changes, so nothing that restarts on such a change (the reservoirs, the
+/// radiance cache's means, the denoiser's history) restarts: the suite measures how soon the
+/// frame lets go of the hidden light, the reservoirs' part where the light is resampled.
+pub fn lights_occluded(resampled: bool) -> Scene {
+    use lights_facts::*;
+    let mut s = if resampled { lights_resampled() } else { lights() };
+    s.name =
+        if resampled { "builtin:stability-lights-occluded-resampled" } else { "builtin:stability-lights-occluded" }
+            .into();
+    s.animations.clear();
+    let hidden = Vec3::new(MOVER_FROM.x, -2.0 * BOX_HALF, MOVER_FROM.z);
+    let around = MOVER_FROM;
+    let cage = add(&mut s, "box", cuboid(Vec3::splat(BOX_HALF), 0), hidden);
+    s.animations.push(Animation {
+        name: "occlude".into(),
+        channels: vec![Channel {
+            node: s.instances[cage as usize].node,
+            property: Property::Translation,
+            interpolation: Interpolation::Step,
+            times: vec![0.0, MOVE_TIME, HOLD],
+            values: vec![hidden.extend(0.0), around.extend(0.0), around.extend(0.0)],
+        }],
+    });
     s
 }
 
