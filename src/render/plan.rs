@@ -171,13 +171,13 @@ impl FramePlan {
                  them from candidates drawn by power{} and last frame's choice, weighted by their unshadowed \
                  contribution{}, with shadow rays",
                 if resampled_lights > 0 { " with the resampled punctual lights" } else { "" },
-                if light_grid { " and by what the light grid's cell sees of the region they are in" } else { "" },
                 if light_grid {
-                    " and by how often gi's shadow rays from that cell reach that region (learned by \
-                     light_grid_update)"
+                    " x what the light grid's cell has learned to see of the region they lie in (gi's shadow \
+                     rays, counted by light_grid_update)"
                 } else {
                     ""
-                }
+                },
+                if light_grid { " x that same learned visibility" } else { "" }
             ));
         }
 
