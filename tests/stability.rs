@@ -222,8 +222,8 @@ fn resampled_lights_follow_a_move_and_a_switch() {
 /// (resampled), and 16 frames later 0.22 and 0.11, 0.40 and 0.13; within 10% after 30 and 38,
 /// 36 and 45 frames. With the radiance cache off the raw frame follows at once (0.02 and 0.004
 /// for the chain's light; the resampled one's reservoirs 0.21 in the first frame, 0.002 16
-/// frames later), so the raw lag is the cache's means and the denoised one SVGF's history
-/// (README, "Stability"). The bounds are the measurement with a margin: they catch it getting
+/// frames later), so the raw lag is the cache's (not its mean's window: halving it changed
+/// nothing; how is not found) and the denoised one SVGF's history (README, "Stability"). The bounds are the measurement with a margin: they catch it getting
 /// worse, not the gap (a light's change settles in 2 frames).
 #[test]
 fn a_light_hidden_by_an_occluder_is_let_go_of() {
