@@ -201,9 +201,9 @@ fn light_off() {
 /// 0.092, the same two frames high). Nothing holds it: against the mean of 56 later frames those
 /// two frames are 0.08 of the step high, and the metric's end value (frames 12..15) is 0.046 low,
 /// within the spread of the radiance cache's frame-correlated noise (README, under the stability
-/// table). A light switched off: denoised 0.0004, raw
-/// 0.025, 0 frames. Bounds 0.13 and 0.16 for the moved light's first frame, 2 frames of lag both
-/// ways; the switched light's as for `light_off`.
+/// table). A light switched off: denoised 0.0004, raw 0.025, 0 frames. Bounds 0.13 and 0.16 for
+/// the moved light's first frame, 2 frames of lag both ways; the switched light's as for
+/// `light_off`.
 #[test]
 fn resampled_lights_follow_a_move_and_a_switch() {
     let scene = hybrid_rt::scene::builtin_stability::lights_resampled();
@@ -223,8 +223,9 @@ fn resampled_lights_follow_a_move_and_a_switch() {
 /// 36 and 45 frames. With the radiance cache off the raw frame follows at once (0.02 and 0.004
 /// for the chain's light; the resampled one's reservoirs 0.21 in the first frame, 0.002 16
 /// frames later), so the raw lag is the cache's (not its mean's window: halving it changed
-/// nothing; how is not found) and the denoised one SVGF's history (README, "Stability"). The bounds are the measurement with a margin: they catch it getting
-/// worse, not the gap (a light's change settles in 2 frames).
+/// nothing; how is not found) and the denoised one SVGF's history (README, "Stability"). The
+/// bounds are the measurement with a margin: they catch it getting worse, not the gap (a light's
+/// change settles in 2 frames).
 #[test]
 fn a_light_hidden_by_an_occluder_is_let_go_of() {
     let scene = hybrid_rt::scene::builtin_stability::lights_occluded(true);

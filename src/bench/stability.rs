@@ -535,10 +535,11 @@ fn occluder_in(rig: &Rig, resampled: bool, denoised: bool) -> Result<Vec<Measure
     let width = rig.width as usize;
     let residual = step_response(&mut r, OCCLUDER_FRAMES, |_| {}, |i| i % width < width / 2)?;
     log::info!(
-        "{}occluder, {}: {} frames until within 10% of the step",
+        "{}occluder, {}: {} frames until within 10% of the step; radiance cache in the last frame: {:?}",
         if resampled { "resampled " } else { "" },
         if denoised { "denoised" } else { "raw" },
-        lag(&residual)
+        lag(&residual),
+        r.radiance_cache_stats()
     );
     // Measured 2026-12-05 (README, "Stability"): far from a light change's 2 frames, since
     // nothing restarts; the bounds are the measurement with a margin, to catch it getting worse.
