@@ -9,6 +9,16 @@
 // Cells fed by cells carry every bounce; the mean's window (max_samples) bounds the lag, and a
 // frame whose lights changed (FRAME_LIGHTS_CHANGED) starts every mean anew.
 //
+// A change the frame does not announce (an object that moves between a light and the room) is
+// caught where it shows: before its sample, a cell checks what its last one saw at the path's
+// first vertex (RcCell.record). If that light sample's shadow ray now ends otherwise, or the
+// cell that answered there restarted since and now holds a clearly different value, and that
+// part of the sample weighs enough against the cell's mean, the mean starts anew (and the
+// cell, young again, traces deep). Means fed by cells cannot let go faster than the loop of
+// cells feeding cells (about window / (1 - what a bounce keeps) frames; a white room keeps most
+// of it); restarts spread along the loop instead, one bounce a frame. A static scene never
+// restarts: the same ray through the same scene ends the same, and cells restart only then.
+//
 // Mode 1, the view (one invocation per pixel): what the cache holds at each G-buffer surface,
 // for dumps and the viewer (radiance_cache.irradiance: rgb = C, a = samples).
 #extension GL_GOOGLE_include_directive : require
@@ -18,6 +28,7 @@
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
 #define RC_BINDING 4
+#define RC_RECORD_FIRST
 #include "common/radiance_cache.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -34,12 +45,55 @@ layout(push_constant) uniform Params {
 
 #define SALT_RADIANCE_CACHE 0x72630000u
 
+// A change restarts a cell's mean when the part of its last sample that changed carries this
+// share of the mean's luminance: smaller changes are left to the mean's window.
+#define RC_RESTART_SHARE 0.1
+// A restarted cell that answered the last sample changed it if its value moved by this share.
+#define RC_RESTART_MOVED 0.5
+
+// Whether what cell's last sample saw at its first vertex changed (see the top): false unless
+// that sample was taken last frame.
+bool changed(RcCell cell, uint read, float mean) {
+    if (cell.record.x != frame.frame_index) return false;
+    if (cell.shadow_from.w > 0.0) {
+        Hit h = trace_ray(cell.shadow_from.xyz, cell.shadow_dir.xyz, 0.0, cell.shadow_from.w, RAY_MASK_ALL, true);
+        bool reached = h.instance == NO_HIT;
+        if (reached != (cell.shadow_dir.w > 0.0) && abs(cell.shadow_dir.w) > RC_RESTART_SHARE * mean) return true;
+    }
+    if (cell.record.y == 0u) return false;
+    // Last frame's copy of the answering cell: fewer samples than it had then, but some, means
+    // it restarted (or a new cell took the slot, which then differs the same way); none, that
+    // it is dying, which leaves what it answered as true as it was.
+    vec4 now = rc_cells[cell.record.y - 1u].radiance[read];
+    vec2 then = unpackHalf2x16(cell.record.z);  // its luminance, its weighted share
+    float moved = abs(luminance(now.rgb) - then.x);
+    return now.a > 0.0 && now.a < uintBitsToFloat(cell.record.w) && moved > RC_RESTART_MOVED * max(luminance(now.rgb), then.x) &&
+           then.y > RC_RESTART_SHARE * mean;
+}
+
+// What this update's sample saw at its first vertex (rc_first), for the next update's check.
+void remember_first_vertex(uint slot, bool sampled) {
+    uint f = frame.frame_index;
+    if (!sampled) {
+        rc_cells[slot].record = uvec4(f + 1u, 0u, 0u, 0u);
+        rc_cells[slot].shadow_from.w = 0.0;
+        return;
+    }
+    rc_cells[slot].shadow_from = vec4(rc_first.from, rc_first.light > 0.0 ? rc_first.tmax : 0.0);
+    rc_cells[slot].shadow_dir = vec4(rc_first.dir, rc_first.reached ? rc_first.light : -rc_first.light);
+    bool answered = rc_first.slot != RC_NONE;
+    rc_cells[slot].record = uvec4(f + 1u, answered ? rc_first.slot + 1u : 0u,
+                                  packHalf2x16(min(vec2(rc_first.value, rc_first.share), vec2(65504.0))),
+                                  floatBitsToUint(rc_first.samples));
+}
+
 void update(uint slot) {
     uint f = frame.frame_index;
     if (slot == 0u) {
         // Nobody else touches the next frame's counters now.
         rc.live[(f + 1u) % 3u] = 0u;
         rc.updated[(f + 1u) % 3u] = 0u;
+        rc.restarted[(f + 1u) % 3u] = 0u;
     }
     uint key = rc_keys[slot];
     if (key == RC_EMPTY) return;
@@ -50,7 +104,8 @@ void update(uint slot) {
     // empty (nobody uses an empty cell), then, unless a query revived it meanwhile, its slot is
     // freed: back to all zeros, the state a new cell starts in.
     if (cell.point.w <= 0.0) {
-        rc_cells[slot] = RcCell(vec4[2](vec4(0.0), vec4(0.0)), vec4(0.0), vec4(0.0), vec4(0.0), uvec4(0u));
+        rc_cells[slot] = RcCell(vec4[2](vec4(0.0), vec4(0.0)), vec4(0.0), vec4(0.0), vec4(0.0), uvec4(0u), vec4(0.0),
+                                vec4(0.0), uvec4(0u));
         rc_keys[slot] = RC_EMPTY;
         return;
     }
@@ -86,6 +141,11 @@ void update(uint slot) {
     uint live_before = max(rc.live[(f + 2u) % 3u], 1u);
     if (rng_next(rng) * float(live_before) < float(rc.budget)) {
         atomicAdd(rc.updated[f % 3u], 1u);
+        if (!relit && changed(cell, read, luminance(mean.rgb))) {
+            atomicAdd(rc.restarted[f % 3u], 1u);
+            mean = vec4(0.0);
+        }
+        bool sampled = false;
         vec3 n = cell.normal.xyz;
         vec3 origin = offset_ray(cell.point.xyz, n);
         vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
@@ -104,8 +164,10 @@ void update(uint slot) {
                 bool deep = relit || mean.a < RC_YOUNG_SAMPLES;
                 uint vertices = deep ? RC_VERTICES_DEEP : RC_VERTICES;
                 estimate = passed * rc_radiance_leaving(s, dir, h.t, deep ? vertices : 0u, vertices, false, read, rng);
+                sampled = true;
             }
         }
+        remember_first_vertex(slot, sampled);
         if (any(isnan(estimate)) || any(isinf(estimate))) estimate = vec3(0.0);
         float samples = min(mean.a + 1.0, float(rc.max_samples));
         mean = vec4(mix(mean.rgb, estimate, 1.0 / samples), samples);

@@ -62,6 +62,11 @@ fn hybrid_luminance(ctx: &Arc<Context>, name: &str, cache: bool, half_rate: bool
     let mut sum = vec![0.0; (size.0 * size.1) as usize];
     for frame in 1..=FRAMES {
         r.render_frame().unwrap();
+        // The rooms hold still: the same ray through the same scene ends the same, so no cell
+        // may take it for a change and restart its mean (radiance_cache.comp).
+        if let Some(stats) = r.radiance_cache_stats() {
+            assert_eq!(stats.restarted, 0, "{name}: cells restarted in frame {frame} of a static scene: {stats:?}");
+        }
         if frame >= AVERAGED_FROM {
             let out = r.read_output(r.hdr_output()).unwrap();
             for (s, l) in sum.iter_mut().zip(luminances(&out)) {

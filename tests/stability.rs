@@ -217,15 +217,13 @@ fn resampled_lights_follow_a_move_and_a_switch() {
 
 /// A box closes around a light between two frames (`occluder`: a light with the shadows chain;
 /// `resampled occluder`: one resampled in gi's reservoirs). Nothing about the lights changes, so
-/// nothing restarts: measured (2026-12-05, both backends alike) over 48 frames after it, the
-/// first frame misses 0.57 of the step denoised and 0.25 raw (chain), 0.94 and 0.43
-/// (resampled), and 16 frames later 0.22 and 0.11, 0.40 and 0.13; within 10% after 30 and 38,
-/// 36 and 45 frames. With the radiance cache off the raw frame follows at once (0.02 and 0.004
-/// for the chain's light; the resampled one's reservoirs 0.21 in the first frame, 0.002 16
-/// frames later), so the raw lag is the cache's (not its mean's window: halving it changed
-/// nothing; how is not found) and the denoised one SVGF's history (README, "Stability"). The
-/// bounds are the measurement with a margin: they catch it getting worse, not the gap (a light's
-/// change settles in 2 frames).
+/// the light-change restart does not happen; the radiance cache's cells notice the change by
+/// their last sample's shadow ray and restart. Measured (2026-12-05) over 48 frames after it,
+/// against the path tracer's mean after the change: the raw frame misses 0.175 of the step in
+/// the first frame and 0.046 16 frames later (chain), 0.366 and 0.100 (resampled); without the
+/// cells' restarts 0.326 and 0.195, 0.460 and 0.177, which the raw bounds (0.25 and 0.1, 0.45
+/// and 0.15) fail. The denoised frame is held by SVGF's history, which nothing restarts: 0.628
+/// and 0.249, 0.951 and 0.446 (bounds 0.7 and 0.3, 0.99 and 0.52; README, "Stability").
 #[test]
 fn a_light_hidden_by_an_occluder_is_let_go_of() {
     let scene = hybrid_rt::scene::builtin_stability::lights_occluded(true);

@@ -69,6 +69,13 @@ struct RcCell {
     vec4 normal;       // xyz: geometric normal there, w: 1 once adopted
     vec4 bounds;       // xyz: the cell's lowest corner, w: its size (for decoding proposals)
     uvec4 proposal;    // x: ~(rank << 24 | position), y: ~(rank << 24 | normal); 0: none
+    // What the update's last sample saw at its path's first vertex (RcFirstVertex), so that the
+    // next update can tell whether it changed (radiance_cache.comp, `changed`):
+    vec4 shadow_from;  // xyz: the light sample's shadow-ray origin, w: its length (0: none)
+    vec4 shadow_dir;   // xyz: its direction, w: the sample's unshadowed luminance, negated if blocked
+    uvec4 record;      // x: frame + 1 of the sample (0: none), y: slot + 1 of the cell that answered
+                       // there (0: none), z: half2(that cell's luminance, its weighted share),
+                       // w: that cell's samples then
 };
 
 // Written by the CPU when the cache is made (params), then counters of the update pass.
@@ -81,6 +88,7 @@ struct RcState {
     uint capacity;       // slots, a power of two
     uint live[3];        // live cells counted by the update of frame f in live[f % 3]
     uint updated[3];     // cells updated by the update of frame f in updated[f % 3]
+    uint restarted[3];   // cells whose mean restarted on a change (radiance_cache.comp)
 };
 
 layout(set = 1, binding = RC_BINDING, std430) coherent buffer RcKeys { uint rc_keys[]; };
@@ -176,6 +184,7 @@ uint rc_copy_written(uint frame_index) { return frame_index & 1u; }
 // A cache answer that holds only if the cell's point sees the query: the visibility ray from
 // `from` along `dir` for `len` must miss.
 struct RcCandidate {
+    uint slot;
     vec3 c;
     vec3 from;
     vec3 dir;
@@ -236,7 +245,7 @@ vec3 rc_blend(vec3 p, vec3 n, uint copy, vec3 home) {
 // claims absent cells, proposes points and keeps cells alive. `blend`: the answer is
 // rc_blend's.
 bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, bool blend, uint copy, out RcCandidate a) {
-    a = RcCandidate(vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, false);
+    a = RcCandidate(RC_NONE, vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, false);
     if (rc.enabled == 0u || t < RC_MIN_CELLS * rc_cell_size(p)) return false;
     uint slot = rc_find(p, n, from_screen);
     if (slot == RC_NONE) return false;
@@ -247,6 +256,7 @@ bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, bool blend, uint copy,
     vec4 radiance = rc_cells[slot].radiance[copy];
     a.empty = rc_cells[slot].normal.w == 0.0 || radiance.a <= 0.0;
     if (a.empty) return false;
+    a.slot = slot;
     float lift = RC_LIFT_CELLS * rc_cell_size(p);
     a.from = p + n * lift;
     vec3 d = rc_cells[slot].point.xyz + rc_cells[slot].normal.xyz * lift - a.from;
@@ -267,6 +277,24 @@ bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, bool blend, uint copy,
 #define RC_RAY_CELL 1u   // the visibility ray between the vertex and its cache cell's point
 #define RC_RAY_NEXT 2u   // the BRDF-sampled ray to the next vertex
 
+#ifdef RC_RECORD_FIRST
+// What rc_radiance_leaving's first vertex saw, for the cache's update (RcCell.record): its
+// light sample's shadow ray and unshadowed luminance (0: none), and the cell that answered
+// there (RC_NONE: none) with its luminance and its weighted share of the estimate.
+struct RcFirstVertex {
+    vec3 from;
+    float tmax;
+    vec3 dir;
+    float light;
+    bool reached;
+    uint slot;
+    float value;
+    float share;
+    float samples;
+};
+RcFirstVertex rc_first;
+#endif
+
 // Light leaving surface s toward -dir, reached by a ray of length t, without s's own emission:
 // a light sample at each vertex, and for the rest the cache from vertex `first_cached` on (0:
 // s itself), tracing on by BRDF sampling where the cache cannot answer, `vertices` at most
@@ -280,6 +308,9 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                          uint copy, inout Rng rng) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
+#ifdef RC_RECORD_FIRST
+    rc_first = RcFirstVertex(vec3(0.0), 0.0, vec3(0.0, 0.0, 1.0), 0.0, false, RC_NONE, 0.0, 0.0, 0.0);
+#endif
     for (uint vertex = 0u; vertex < vertices; ++vertex) {
         // Glass reflects only the light it does not let through: its diffuse lobe shrinks by
         // the transmitted share (exactly so for a dielectric; a transmissive metal's F0 tint
@@ -343,6 +374,20 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
 #ifdef LIGHT_GRID_LEARN
             // A resampled light's shadow ray teaches the light grid what this cell sees.
             if (ray == RC_RAY_LIGHT) light_grid_learn(leave, ls.light, h.instance == NO_HIT);
+#endif
+#ifdef RC_RECORD_FIRST
+            if (vertex == 0u && ray == RC_RAY_LIGHT) {
+                rc_first.from = o;
+                rc_first.dir = d;
+                rc_first.tmax = tmax;
+                rc_first.light = luminance(f * ls.weight);
+                rc_first.reached = h.instance == NO_HIT;
+            } else if (vertex == 0u && ray == RC_RAY_CELL && h.instance == NO_HIT) {
+                rc_first.slot = cached.slot;
+                rc_first.value = luminance(cached.c);
+                rc_first.share = luminance(bs.weight * cached.c);
+                rc_first.samples = rc_cells[cached.slot].radiance[copy].a;
+            }
 #endif
             if (ray == RC_RAY_LIGHT && h.instance == NO_HIT) {
                 // Full weight: a BRDF-sampled ray counts emission only through a specular lobe,

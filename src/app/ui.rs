@@ -71,7 +71,10 @@ pub fn draw(ctx: &egui::Context, info: &Info, settings: &mut Settings) -> Vec<Ac
                 info.present_mode
             ));
             if let Some(c) = info.radiance_cache {
-                ui.label(format!("radiance cache: {} live cells, {} updated", c.live, c.updated));
+                ui.label(format!(
+                    "radiance cache: {} live cells, {} updated, {} restarted on a change",
+                    c.live, c.updated, c.restarted
+                ));
             }
             ui.horizontal(|ui| {
                 if ui.button("Screenshot").on_hover_text("saves the shown image, without this overlay").clicked() {

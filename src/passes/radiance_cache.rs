@@ -20,13 +20,13 @@ pub const IRRADIANCE: Output = Output::new(NAME, "irradiance");
 /// The GLSL names of the cache's buffer blocks (common/radiance_cache.glsl), in binding order.
 pub const BUFFER_BLOCKS: [&str; 3] = ["RcKeys", "RcCells", "RcStateBuffer"];
 
-/// Slots of the hash table: a power of two. 128 Ki cells of 96 bytes (12 MiB).
+/// Slots of the hash table: a power of two. 128 Ki cells of 144 bytes (18 MiB).
 pub const CAPACITY: u32 = 1 << 17;
 /// The running mean's window: the cache follows a change of the light within about this many
 /// updates of a cell.
 pub const MAX_SAMPLES: u32 = 16;
-/// Size of `RcCell` in common/radiance_cache.glsl (std430: five vec4 and a uvec4).
-const CELL_BYTES: u64 = 96;
+/// Size of `RcCell` in common/radiance_cache.glsl (std430: seven vec4 and two uvec4).
+const CELL_BYTES: u64 = 144;
 /// Invocations per workgroup of the update (`local_size_x * local_size_y`).
 const UPDATE_GROUP: u32 = 64;
 
@@ -75,13 +75,16 @@ struct State {
     capacity: u32,
     live: [u32; 3],
     updated: [u32; 3],
+    restarted: [u32; 3],
 }
 
-/// Live and updated cells in one frame.
+/// Live and updated cells in one frame, and those whose mean restarted on a change of the scene
+/// that the frame did not announce (radiance_cache.comp).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct CacheStats {
     pub live: u32,
     pub updated: u32,
+    pub restarted: u32,
 }
 
 /// The cache's buffers, shared by this pass, gi and reflections, bound in this order after
@@ -139,7 +142,7 @@ impl Cache {
         let Some(bytes) = self.state.mapped() else { return CacheStats::default() };
         let state: State = bytemuck::pod_read_unaligned(&bytes[..size_of::<State>()]);
         let i = (frame_index % 3) as usize;
-        CacheStats { live: state.live[i], updated: state.updated[i] }
+        CacheStats { live: state.live[i], updated: state.updated[i], restarted: state.restarted[i] }
     }
 }
 
