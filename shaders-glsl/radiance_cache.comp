@@ -20,14 +20,16 @@
 // restarts: the same ray through the same scene ends the same, and cells restart only then.
 //
 // Mode 1, the view (one invocation per pixel): what the cache holds at each G-buffer surface,
-// for dumps and the viewer (radiance_cache.irradiance: rgb = C, a = samples).
+// for dumps and the viewer (radiance_cache.irradiance: rgb = C, a = samples), and where a cell
+// there restarted on a change this frame (radiance_cache.changed), which tells SVGF's temporal
+// pass that the diffuse history there holds light that is gone.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
 #include "common/light_sampling.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
-#define RC_BINDING 4
+#define RC_BINDING 5
 #define RC_RECORD_FIRST
 #include "common/radiance_cache.glsl"
 
@@ -37,6 +39,7 @@ layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;
 layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 2, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 3, rgba32f) uniform writeonly image2D out_irradiance;
+layout(set = 1, binding = 4, r32f) uniform writeonly image2D out_changed;
 
 layout(push_constant) uniform Params {
     uint mode;  // 0: update, 1: view
@@ -105,7 +108,7 @@ void update(uint slot) {
     // freed: back to all zeros, the state a new cell starts in.
     if (cell.point.w <= 0.0) {
         rc_cells[slot] = RcCell(vec4[2](vec4(0.0), vec4(0.0)), vec4(0.0), vec4(0.0), vec4(0.0), uvec4(0u), vec4(0.0),
-                                vec4(0.0), uvec4(0u));
+                                vec4(0.0), uvec4(0u), uvec4(0u));
         rc_keys[slot] = RC_EMPTY;
         return;
     }
@@ -143,6 +146,7 @@ void update(uint slot) {
         atomicAdd(rc.updated[f % 3u], 1u);
         if (!relit && changed(cell, read, luminance(mean.rgb))) {
             atomicAdd(rc.restarted[f % 3u], 1u);
+            rc_cells[slot].restart.x = f + 1u;
             mean = vec4(0.0);
         }
         bool sampled = false;
@@ -175,14 +179,38 @@ void update(uint slot) {
     rc_cells[slot].radiance[write] = mean;
 }
 
+// Whether a cell around p restarted this frame: p's own or one of the other three of the four
+// nearest in the plane of its normal's dominant axis (rc_blend's). About half the cells of a
+// region whose light changed notice it, so one cell's restart stands for its neighbours'
+// surfaces too; a still scene restarts none.
+bool restarted_near(vec3 p, vec3 n) {
+    float cell = rc_cell_size(p);
+    uint bucket = rc_normal_bucket(n);
+    uint axis = bucket / 2u;
+    uint u = axis == 0u ? 1u : 0u, v = axis == 2u ? 1u : 2u;
+    vec3 g = p / cell;
+    ivec2 base = ivec2(floor(vec2(g[u], g[v]) - 0.5));
+    bool any_restarted = false;
+    [[unroll]] for (int i = 0; i < 4; ++i) {
+        ivec3 c = ivec3(floor(g));
+        c[u] = base.x + (i & 1);
+        c[v] = base.y + (i >> 1);
+        uint slot = rc_find_key(rc_cell_key(c, cell, bucket), false);
+        any_restarted = any_restarted || slot != RC_NONE && rc_cells[slot].restart.x == frame.frame_index + 1u;
+    }
+    return any_restarted;
+}
+
 void view(ivec2 px) {
     if (imageLoad(g_ids, px).x == NO_INSTANCE) {
         imageStore(out_irradiance, px, vec4(0.0));
+        imageStore(out_changed, px, vec4(0.0));
         return;
     }
     vec3 p = world_position(px, imageLoad(g_depth, px).r);
     uint slot = rc_find(p, imageLoad(g_normal_geo, px).xyz, false);
     imageStore(out_irradiance, px, slot == RC_NONE ? vec4(0.0) : rc_cells[slot].radiance[rc_copy_written(frame.frame_index)]);
+    imageStore(out_changed, px, vec4(restarted_near(p, imageLoad(g_normal_geo, px).xyz) ? 1.0 : 0.0));
 }
 
 void main() {

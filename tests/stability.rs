@@ -218,12 +218,14 @@ fn resampled_lights_follow_a_move_and_a_switch() {
 /// A box closes around a light between two frames (`occluder`: a light with the shadows chain;
 /// `resampled occluder`: one resampled in gi's reservoirs). Nothing about the lights changes, so
 /// the light-change restart does not happen; the radiance cache's cells notice the change by
-/// their last sample's shadow ray and restart. Measured (2026-12-05) over 48 frames after it,
-/// against the path tracer's mean after the change: the raw frame misses 0.175 of the step in
-/// the first frame and 0.046 16 frames later (chain), 0.366 and 0.100 (resampled); without the
-/// cells' restarts 0.326 and 0.195, 0.460 and 0.177, which the raw bounds (0.25 and 0.1, 0.45
-/// and 0.15) fail. The denoised frame is held by SVGF's history, which nothing restarts: 0.628
-/// and 0.249, 0.951 and 0.446 (bounds 0.7 and 0.3, 0.99 and 0.52; README, "Stability").
+/// their last sample's shadow ray and restart, and SVGF's diffuse history restarts where a cell
+/// around the pixel did. Measured (2026-12-05) over 48 frames after it, against the path
+/// tracer's mean after the change, first frame and 16 frames later: raw 0.175 and 0.046
+/// (chain), 0.366 and 0.100 (resampled), 0.326 and 0.195, 0.460 and 0.177 without the cells'
+/// restarts (raw bounds 0.25 and 0.1, 0.45 and 0.15); denoised 0.341 and 0.079, 0.758 and
+/// 0.212, 0.628 and 0.249, 0.951 and 0.446 with the cells' restarts only (bounds 0.42 and 0.12,
+/// 0.85 and 0.28). The rest is the cells no check caught and the light the cells feeding cells
+/// carry back (README, "Stability").
 #[test]
 fn a_light_hidden_by_an_occluder_is_let_go_of() {
     let scene = hybrid_rt::scene::builtin_stability::lights_occluded(true);

@@ -76,6 +76,7 @@ struct RcCell {
     uvec4 record;      // x: frame + 1 of the sample (0: none), y: slot + 1 of the cell that answered
                        // there (0: none), z: half2(that cell's luminance, its weighted share),
                        // w: that cell's samples then
+    uvec4 restart;     // x: frame + 1 of the mean's last restart on a change (0: none)
 };
 
 // Written by the CPU when the cache is made (params), then counters of the update pass.

@@ -72,15 +72,19 @@ layout(set = 1, binding = 15, r32f) uniform readonly image2D prev_specular_histo
 // surface lets through (0: none traced; a zero image without SVGF_SHARP_SPECULAR).
 layout(set = 1, binding = 16, r32f) uniform readonly image2D in_hit_distance;
 layout(set = 1, binding = 17, rgba8) uniform readonly image2D g_metal_rough;
-layout(set = 1, binding = 18, rgba16f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 19, rgba16f) uniform writeonly image2D out_specular;
-layout(set = 1, binding = 20, rg32f) uniform writeonly image2D out_diffuse_moments;
-layout(set = 1, binding = 21, rg32f) uniform writeonly image2D out_specular_moments;
-layout(set = 1, binding = 22, r32f) uniform writeonly image2D out_diffuse_history_length;
-layout(set = 1, binding = 23, r32f) uniform writeonly image2D out_specular_history_length;
-layout(set = 1, binding = 24, rgba16f) uniform writeonly image2D out_diffuse_clamped;
-layout(set = 1, binding = 25, rgba16f) uniform writeonly image2D out_specular_clamped;
-#define SVGF_OUT_REJECTED 26
+// radiance_cache.changed: 1 where the radiance cache's cell at the surface restarted this
+// frame on a change of its light that the frame did not announce (an occluder); a zero image
+// without a cache.
+layout(set = 1, binding = 18, r32f) uniform readonly image2D in_cache_changed;
+layout(set = 1, binding = 19, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 20, rgba16f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 21, rg32f) uniform writeonly image2D out_diffuse_moments;
+layout(set = 1, binding = 22, rg32f) uniform writeonly image2D out_specular_moments;
+layout(set = 1, binding = 23, r32f) uniform writeonly image2D out_diffuse_history_length;
+layout(set = 1, binding = 24, r32f) uniform writeonly image2D out_specular_history_length;
+layout(set = 1, binding = 25, rgba16f) uniform writeonly image2D out_diffuse_clamped;
+layout(set = 1, binding = 26, rgba16f) uniform writeonly image2D out_specular_clamped;
+#define SVGF_OUT_REJECTED 27
 
 vec3 load_input(int s, ivec2 q) { return (s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return (s == 0 ? imageLoad(prev_diffuse, q) : imageLoad(prev_specular, q)).rgb; }
@@ -401,6 +405,13 @@ void main() {
     // A camera cut, or lights that changed since last frame: the history holds light that is
     // gone (the lag a lit history would add is the whole accumulation window).
     bool reset = (frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u;
+#ifdef SVGF_PAIR
+    // The radiance cache's cell here let go of light that is gone (radiance_cache.comp): the
+    // diffuse history holds it too, and starts anew as at a disocclusion.
+    bool diffuse_changed = imageLoad(in_cache_changed, px).r > 0.0;
+#else
+    bool diffuse_changed = false;
+#endif
     vec4 tap_w[SIGNALS];
     bool young[SIGNALS], blur[SIGNALS];
     float len[SIGNALS];
@@ -424,7 +435,7 @@ void main() {
             }
         }
         float wsum = dot(tap_w[s], vec4(1.0));
-        blur[s] = wsum <= 1e-3;  // nothing reprojects
+        blur[s] = wsum <= 1e-3 || (s == 0 && diffuse_changed);  // nothing reprojects, or nothing holds
         if (!blur[s]) {
             hist_c[s] /= wsum;
             hist_m[s] /= wsum;

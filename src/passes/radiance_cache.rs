@@ -17,16 +17,20 @@ pub const NAME: &str = "radiance_cache";
 /// What the cache holds at each G-buffer surface: rgb the cached (1/pi) int L_r cos, a the
 /// samples in its running mean (0: no cell there yet).
 pub const IRRADIANCE: Output = Output::new(NAME, "irradiance");
+/// 1 where the cell at a G-buffer surface restarted its mean this frame on a change that the
+/// frame did not announce (an object moved between it and a light): SVGF's temporal pass
+/// restarts the diffuse history there.
+pub const CHANGED: Output = Output::new(NAME, "changed");
 /// The GLSL names of the cache's buffer blocks (common/radiance_cache.glsl), in binding order.
 pub const BUFFER_BLOCKS: [&str; 3] = ["RcKeys", "RcCells", "RcStateBuffer"];
 
-/// Slots of the hash table: a power of two. 128 Ki cells of 144 bytes (18 MiB).
+/// Slots of the hash table: a power of two. 128 Ki cells of 160 bytes (20 MiB).
 pub const CAPACITY: u32 = 1 << 17;
 /// The running mean's window: the cache follows a change of the light within about this many
 /// updates of a cell.
 pub const MAX_SAMPLES: u32 = 16;
-/// Size of `RcCell` in common/radiance_cache.glsl (std430: seven vec4 and two uvec4).
-const CELL_BYTES: u64 = 144;
+/// Size of `RcCell` in common/radiance_cache.glsl (std430: seven vec4 and three uvec4).
+const CELL_BYTES: u64 = 160;
 /// Invocations per workgroup of the update (`local_size_x * local_size_y`).
 const UPDATE_GROUP: u32 = 64;
 
@@ -165,7 +169,10 @@ pub struct Params {
 
 pub fn new(b: &PassBuilder, cache: &Arc<Cache>, seed: u32) -> Result<RadianceCachePass> {
     let inputs = [gbuffer::DEPTH, gbuffer::NORMAL_GEO, gbuffer::IDS].map(Input::texel).to_vec();
-    let outputs = vec![OutputDesc::storage(IRRADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
+    let outputs = vec![
+        OutputDesc::storage(IRRADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
+        OutputDesc::storage(CHANGED, vk::Format::R32_SFLOAT, Preview::Scalar),
+    ];
     let pass = FullscreenPass::with_buffers(
         b,
         NAME,

@@ -91,7 +91,9 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     if settings.denoiser {
         // The specular signal of reflection rays follows what they hit when the camera moves.
         let hit_distance = plan.reflections.then_some(passes::reflections::HIT_DISTANCE.into());
-        let chain = svgf::pair(b, diffuse, specular, hit_distance, &settings.denoise)?;
+        // Where the radiance cache let go of light that is gone, so does the diffuse history.
+        let cache_changed = cache_used.then_some(radiance_cache::CHANGED.into());
+        let chain = svgf::pair(b, diffuse, specular, hit_distance, cache_changed, &settings.denoise)?;
         passes.extend(chain.passes);
         kept.extend(chain.kept);
         (diffuse, specular) = (chain.outputs[0].into(), chain.outputs[1].into());
