@@ -72,7 +72,7 @@ layout(set = 1, binding = 15, r32f) uniform readonly image2D prev_specular_histo
 // surface lets through (0: none traced; a zero image without SVGF_SHARP_SPECULAR).
 layout(set = 1, binding = 16, r32f) uniform readonly image2D in_hit_distance;
 layout(set = 1, binding = 17, rgba8) uniform readonly image2D g_metal_rough;
-// radiance_cache.changed: 1 where the radiance cache's cell at the surface restarted this
+// radiance_cache.changed: 1 where a radiance cache cell around the surface restarted this
 // frame on a change of its light that the frame did not announce (an occluder); a zero image
 // without a cache.
 layout(set = 1, binding = 18, r32f) uniform readonly image2D in_cache_changed;
@@ -406,8 +406,8 @@ void main() {
     // gone (the lag a lit history would add is the whole accumulation window).
     bool reset = (frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u;
 #ifdef SVGF_PAIR
-    // The radiance cache's cell here let go of light that is gone (radiance_cache.comp): the
-    // diffuse history holds it too, and starts anew as at a disocclusion.
+    // A radiance cache cell around here let go of light that is gone (radiance_cache.comp):
+    // the diffuse history holds it too, and starts anew as at a disocclusion.
     bool diffuse_changed = imageLoad(in_cache_changed, px).r > 0.0;
 #else
     bool diffuse_changed = false;

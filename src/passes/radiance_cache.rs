@@ -17,9 +17,9 @@ pub const NAME: &str = "radiance_cache";
 /// What the cache holds at each G-buffer surface: rgb the cached (1/pi) int L_r cos, a the
 /// samples in its running mean (0: no cell there yet).
 pub const IRRADIANCE: Output = Output::new(NAME, "irradiance");
-/// 1 where the cell at a G-buffer surface restarted its mean this frame on a change that the
-/// frame did not announce (an object moved between it and a light): SVGF's temporal pass
-/// restarts the diffuse history there.
+/// 1 where a cell around a G-buffer surface (its own or one of the four nearest in its plane)
+/// restarted its mean this frame on a change that the frame did not announce (an object moved
+/// between it and a light): SVGF's temporal pass restarts the diffuse history there.
 pub const CHANGED: Output = Output::new(NAME, "changed");
 /// The GLSL names of the cache's buffer blocks (common/radiance_cache.glsl), in binding order.
 pub const BUFFER_BLOCKS: [&str; 3] = ["RcKeys", "RcCells", "RcStateBuffer"];
