@@ -22,7 +22,9 @@
 //   into gi.specular, a punctual light's on every surface (the reflections pass adds it under
 //   the cut-off, where its rays cannot hit a punctual light), an emitter's on rough ones (under
 //   the cut-off the reflection rays find it). The bounce ray hitting an emitter adds no direct
-//   light (the reservoir has it). The reservoir goes to gi.reservoir for the next frame;
+//   light (the reservoir has it). The reservoir goes to gi.reservoir for the next frame, and
+//   where last frame's choice, lit then, is now in shadow (an occluder the frame was not told
+//   of), what it brought goes to gi.light_lost, so that the denoiser lets go of it too;
 // - indirect light (the bounce ray goes straight on through see-through surfaces, as the light
 //   sample's shadow ray does: common/pass_through.glsl): at the bounce ray's hit, next-event
 //   estimation toward a light chosen by power (any kind, with a shadow ray), and the light that
@@ -49,7 +51,7 @@
 #include "common/light_reservoir.glsl"
 #include "common/gi_fill.glsl"
 #include "common/pass_through.glsl"
-#define RC_BINDING 14
+#define RC_BINDING 15
 #include "common/radiance_cache.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -69,6 +71,9 @@ layout(set = 1, binding = 10, rgba32f) uniform readonly image2D prev_reservoir;
 layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_radiance;
 layout(set = 1, binding = 12, rgba32f) uniform writeonly image2D out_specular;
 layout(set = 1, binding = 13, rgba32f) uniform writeonly image2D out_reservoir;
+// Luminance of what last frame's resampled light, visible then and occluded now, brought to the
+// diffuse (x) and specular (y) signals; 1x1 like the reservoir when no light is resampled.
+layout(set = 1, binding = 14, rg32f) uniform writeonly image2D out_light_lost;
 
 layout(push_constant) uniform Params {
     uint bounces;            // vertices traced after the primary surface before the cache answers
@@ -105,8 +110,9 @@ bool has_diffuse(ivec2 px) {
 }
 bool has_rough(ivec2 px) { return imageLoad(g_metal_rough, px).y > params.roughness_cutoff; }
 
-// Traces pixel `px`'s samples and writes its outputs.
-void shade(ivec2 px) {
+// Traces pixel `px`'s samples and writes its outputs but gi.light_lost, which it returns (x
+// diffuse, y specular; at half rate the untraced pixel of the pair shares it).
+vec2 shade(ivec2 px) {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = has_rough(px);
     bool diffuse = has_diffuse(px);
@@ -117,7 +123,7 @@ void shade(ivec2 px) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_specular, px, vec4(0.0));
         if (resampled) imageStore(out_reservoir, px, reservoir_pack(reservoir_empty()));
-        return;
+        return vec2(0.0);
     }
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, dielectric_f0(materials[ids.y].ior));
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_GI);
@@ -149,6 +155,7 @@ void shade(ivec2 px) {
         prev = previous_reservoir(px, ids.x, depth, ng, sp);
     }
     NeeSample chosen = nee_none();  // the resampled light's sample, once found visible
+    vec2 lost = vec2(0.0);          // gi.light_lost
     // Whether the environment sends light (else nothing to draw toward it).
     bool env_lit = light_table.entry_count > 0u && light_entries[light_table.env_entry].pmf > 0.0;
     [[dont_unroll]] for (uint k = 0u; k < 3u; ++k) {
@@ -173,6 +180,7 @@ void shade(ivec2 px) {
         float cos_l = max(dot(n, ls.dir), 0.0);
         // What passes the see-through surfaces on the way scales the sample.
         bool traced = dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0;
+        vec3 unshadowed = ls.weight;
         if (traced) {
             ls.weight *= trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
         } else {
@@ -191,6 +199,15 @@ void shade(ivec2 px) {
         } else if (visible) {
             chosen = ls;
         } else {
+            // Last frame's choice, lit then (an occluded one is carried with weight 0), is in
+            // shadow now: what it would have brought is what the histories hold and must lose.
+            if (k == 2u && traced) {
+                vec3 le = unshadowed * reservoir_weight(r);
+                lost = vec2(luminance(le * cos_l * INV_PI * brdf_diffuse_weight(m, n, v, ls.dir)),
+                            luminance(le * brdf_eval_specular_cos(m, n, v, ls.dir)));
+                if (!diffuse) lost.x = 0.0;
+                if (!(rough || reservoir_punctual(r.light))) lost.y = 0.0;
+            }
             // Carried forward with weight 0: its candidates still count in M.
             r.w_sum = 0.0;
         }
@@ -239,6 +256,7 @@ void shade(ivec2 px) {
     }
     imageStore(out_radiance, px, vec4(diffuse ? l_sum : vec3(0.0), 1.0));
     imageStore(out_specular, px, vec4(spec_sum, 1.0));
+    return lost;
 }
 
 // At half rate, what gi_fill needs to fill untraced pixel `px` (common/gi_fill.glsl): its traced
@@ -293,6 +311,7 @@ void main() {
     uint parity = half_rate ? (uint(g.y) + frame.frame_index) & 1u : 0u;
     ivec2 traced = half_rate ? ivec2(2 * g.x + int(parity), g.y) : g;
     ivec2 filled = ivec2(2 * g.x + 1 - int(parity), g.y);
+    vec2 lost = vec2(0.0);
     [[dont_unroll]] for (uint k = 0u; k < (half_rate ? 2u : 1u); ++k) {
         ivec2 px = k == 0u ? traced : filled;
         if (any(greaterThanEqual(px, ivec2(frame.size)))) continue;
@@ -301,10 +320,14 @@ void main() {
             if (sources != 0u) {
                 imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, -float(sources)));
                 imageStore(out_specular, px, vec4(0.0));
-                if (reservoirs_present()) carry_reservoir(px);
+                if (reservoirs_present()) {
+                    carry_reservoir(px);
+                    imageStore(out_light_lost, px, vec4(lost, 0.0, 0.0));
+                }
                 continue;
             }
         }
-        shade(px);
+        lost = shade(px);
+        if (reservoirs_present()) imageStore(out_light_lost, px, vec4(lost, 0.0, 0.0));
     }
 }

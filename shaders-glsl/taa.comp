@@ -11,12 +11,17 @@
 // chain's SVGF history is, and on glass or a blended surface, whose colour is partly what
 // lies behind them, where whichever of the reflected and the let-through light is the larger
 // was (reflections.hit_distance says which), for its share of the colour; the disocclusion
-// test still asks about the surface.
+// test still asks about the surface. Where the light changed, the history is dropped as SVGF's
+// is: everywhere when the frame says its lights changed, and where a radiance cache cell
+// restarted or the pixel's resampled light went into shadow (an occluder the frame was not
+// told of), else the clamp box of a noisy neighbourhood lets the old light through for TAA's
+// whole window.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
 #include "common/color.glsl"
 #include "common/reflection_motion.glsl"
+#include "common/light_lost.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -30,7 +35,11 @@ layout(set = 1, binding = 5, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 6, r32f) uniform readonly image2D in_hit_distance;
 layout(set = 1, binding = 7, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 8, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 9, rgba32f) uniform writeonly image2D out_color;
+// radiance_cache.changed and gi.light_lost (zero images where the frame has no cache or no
+// resampled light).
+layout(set = 1, binding = 9, r32f) uniform readonly image2D in_cache_changed;
+layout(set = 1, binding = 10, rg32f) uniform readonly image2D in_light_lost;
+layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 
 // Motion vectors differing by more than this many pixels belong to different surfaces.
 #define DISOCCLUSION_MOTION 0.5
@@ -80,7 +89,7 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     vec3 cur = imageLoad(in_color, px).rgb;
-    if ((frame.flags & FRAME_RESET_HISTORY) != 0u) {
+    if ((frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u) {
         imageStore(out_color, px, vec4(cur, 1.0));
         return;
     }
@@ -122,8 +131,17 @@ void main() {
         if (all(greaterThanEqual(reflected, vec2(0.0))) && all(lessThan(reflected, vec2(frame.size)))) prev_pos = reflected;
     }
     vec3 result = cur;
+    vec3 hist_rgb = vec3(0.0);
     if (valid) {
-        vec3 hist = to_ycocg(history_catmull_rom(prev_pos));
+        hist_rgb = history_catmull_rom(prev_pos);
+        // What the pixel's resampled light no longer brings, modulated as the colour is.
+        vec2 lost = imageLoad(in_light_lost, px).xy;
+        vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - metal_rough.x);
+        float lost_here = lost.x * luminance(albedo) + lost.y;
+        valid = imageLoad(in_cache_changed, px).r == 0.0 && !lost_share_of(lost_here, luminance(hist_rgb));
+    }
+    if (valid) {
+        vec3 hist = to_ycocg(hist_rgb);
         vec2 moved = vec2(px) + 0.5 - prev_pos;
         float blend = mix(taa.blend, FAST_BLEND, clamp(length(moved) / taa.fast_motion, 0.0, 1.0));
         result = mix(from_ycocg(clamp(hist, lo, hi)), cur, blend);

@@ -42,6 +42,7 @@
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
 #include "common/reflection_motion.glsl"
+#include "common/light_lost.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;  // the tile below assumes 8x8
 
@@ -76,15 +77,19 @@ layout(set = 1, binding = 17, rgba8) uniform readonly image2D g_metal_rough;
 // frame on a change of its light that the frame did not announce (an occluder); a zero image
 // without a cache.
 layout(set = 1, binding = 18, r32f) uniform readonly image2D in_cache_changed;
-layout(set = 1, binding = 19, rgba16f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 20, rgba16f) uniform writeonly image2D out_specular;
-layout(set = 1, binding = 21, rg32f) uniform writeonly image2D out_diffuse_moments;
-layout(set = 1, binding = 22, rg32f) uniform writeonly image2D out_specular_moments;
-layout(set = 1, binding = 23, r32f) uniform writeonly image2D out_diffuse_history_length;
-layout(set = 1, binding = 24, r32f) uniform writeonly image2D out_specular_history_length;
-layout(set = 1, binding = 25, rgba16f) uniform writeonly image2D out_diffuse_clamped;
-layout(set = 1, binding = 26, rgba16f) uniform writeonly image2D out_specular_clamped;
-#define SVGF_OUT_REJECTED 27
+// gi.light_lost: what a pixel's resampled light brought to each signal last frame where it is
+// now in shadow, x diffuse, y specular (an occluder the frame was not told of); a zero image
+// without resampled lights.
+layout(set = 1, binding = 19, rg32f) uniform readonly image2D in_light_lost;
+layout(set = 1, binding = 20, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 21, rgba16f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 22, rg32f) uniform writeonly image2D out_diffuse_moments;
+layout(set = 1, binding = 23, rg32f) uniform writeonly image2D out_specular_moments;
+layout(set = 1, binding = 24, r32f) uniform writeonly image2D out_diffuse_history_length;
+layout(set = 1, binding = 25, r32f) uniform writeonly image2D out_specular_history_length;
+layout(set = 1, binding = 26, rgba16f) uniform writeonly image2D out_diffuse_clamped;
+layout(set = 1, binding = 27, rgba16f) uniform writeonly image2D out_specular_clamped;
+#define SVGF_OUT_REJECTED 28
 
 vec3 load_input(int s, ivec2 q) { return (s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return (s == 0 ? imageLoad(prev_diffuse, q) : imageLoad(prev_specular, q)).rgb; }
@@ -409,8 +414,12 @@ void main() {
     // A radiance cache cell around here let go of light that is gone (radiance_cache.comp):
     // the diffuse history holds it too, and starts anew as at a disocclusion.
     bool diffuse_changed = imageLoad(in_cache_changed, px).r > 0.0;
+    // The resampled light this pixel saw last frame is in shadow now: where it brought a
+    // share of what a signal's history holds, that history starts anew too.
+    vec2 lost = imageLoad(in_light_lost, px).xy;
 #else
     bool diffuse_changed = false;
+    vec2 lost = vec2(0.0);
 #endif
     vec4 tap_w[SIGNALS];
     bool young[SIGNALS], blur[SIGNALS];
@@ -435,11 +444,12 @@ void main() {
             }
         }
         float wsum = dot(tap_w[s], vec4(1.0));
-        blur[s] = wsum <= 1e-3 || (s == 0 && diffuse_changed);  // nothing reprojects, or nothing holds
-        if (!blur[s]) {
+        if (wsum > 1e-3) {
             hist_c[s] /= wsum;
             hist_m[s] /= wsum;
         }
+        bool gone = (s == 0 && diffuse_changed) || lost_share_of(lost[s], luminance(hist_c[s]));
+        blur[s] = wsum <= 1e-3 || gone;  // nothing reprojects, or nothing holds
         len[s] = blur[s] ? 1.0 : min(hist_len / wsum + 1.0, cap[s]);
         young[s] = len[s] < SVGF_MOMENTS_FRAMES;
     }

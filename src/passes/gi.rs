@@ -28,6 +28,10 @@ pub const SPECULAR: Output = Output::new(NAME, "specular");
 /// resampled).
 pub const RESERVOIR: Output = Output::new(NAME, "reservoir");
 const RESERVOIR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// Where last frame's resampled light, visible then, is in shadow now (an occluder the frame was
+/// not told of): the luminance of what it brought to the diffuse (r) and specular (g) signals,
+/// which restarts their SVGF histories (1x1 when no light is resampled).
+pub const LIGHT_LOST: Output = Output::new(NAME, "light_lost");
 
 /// gi.comp's push-constant block.
 #[repr(C)]
@@ -92,6 +96,7 @@ pub fn new(
         OutputDesc::storage(RADIANCE, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         OutputDesc::storage(SPECULAR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color),
         reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), reservoirs),
+        reservoir_size(OutputDesc::storage(LIGHT_LOST, vk::Format::R32G32_SFLOAT, Preview::Color), reservoirs),
     ];
     if s.half_rate {
         log::info!(

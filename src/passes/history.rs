@@ -8,9 +8,10 @@
 //! a 410-474 ms frame at 640x360 on lavapipe, and on a GPU a read and a write of every kept
 //! image a frame.
 
-use super::gbuffer;
+use super::fullscreen::Input;
+use super::{gbuffer, gi, radiance_cache};
 use crate::gpu::vk;
-use crate::graph::{Output, OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Resource, Usage};
+use crate::graph::{self, Output, OutputDesc, Pass, PassContext, PassDesc, PassKind, Preview, Resource, Usage};
 use anyhow::Result;
 
 pub const NAME: &str = "history";
@@ -39,6 +40,30 @@ impl Kept {
 /// The previous frame's `source` (shown as `history.<pass>_<output>`).
 pub fn of(source: Output) -> Resource {
     Resource::History(source)
+}
+
+/// What tells the temporal passes (SVGF's, TAA) that light their history holds is gone where
+/// the frame did not announce it (an occluder; a change of the lights restarts every history
+/// anyway): each where the frame has the pass that writes it.
+#[derive(Clone, Copy, Default)]
+pub struct Restarts {
+    /// `radiance_cache::CHANGED`: a radiance cache cell around the pixel restarted.
+    pub cache_changed: Option<Resource>,
+    /// `gi::LIGHT_LOST`: what the pixel's resampled light brought, now in shadow.
+    pub light_lost: Option<Resource>,
+}
+
+impl Restarts {
+    /// Their inputs, `in_cache_changed` and `in_light_lost`, a zero image for either missing.
+    pub fn inputs(&self) -> [Input; 2] {
+        let bind = |output: Output, name: &str, resource: Option<Resource>, format: vk::Format| {
+            Input::texel(output).bound_as(name).reading(resource.unwrap_or_else(|| graph::zero(format, false)))
+        };
+        [
+            bind(radiance_cache::CHANGED, "in_cache_changed", self.cache_changed, vk::Format::R32_SFLOAT),
+            bind(gi::LIGHT_LOST, "in_light_lost", self.light_lost, vk::Format::R32G32_SFLOAT),
+        ]
+    }
 }
 
 /// The G-buffer channels every reprojection needs.

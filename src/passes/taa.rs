@@ -6,7 +6,7 @@
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::gbuffer;
-use super::history::{self, Kept};
+use super::history::{self, Kept, Restarts};
 use super::reflections;
 use crate::gpu::vk;
 use crate::graph::{self, Output, OutputDesc, Preview, Resource};
@@ -32,10 +32,11 @@ pub struct Params {
 }
 
 /// `input` is the HDR image to resolve (bound as `in_color`); `reflections`: whether the frame
-/// traces reflection rays, whose hit distance moves a mirror's history with what it reflects.
-pub fn new(b: &PassBuilder, input: Resource, reflections: bool) -> Result<FullscreenPass> {
+/// traces reflection rays, whose hit distance moves a mirror's history with what it reflects;
+/// `restarts`: where light the history holds is gone, which drops it there.
+pub fn new(b: &PassBuilder, input: Resource, reflections: bool, restarts: Restarts) -> Result<FullscreenPass> {
     let hit_distance = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
-    let inputs = vec![
+    let mut inputs = vec![
         Input::texel(input).bound_as("in_color"),
         Input::texel(gbuffer::MOTION),
         Input::texel(history::of(gbuffer::MOTION)),
@@ -46,6 +47,7 @@ pub fn new(b: &PassBuilder, input: Resource, reflections: bool) -> Result<Fullsc
         Input::texel(gbuffer::BASE_COLOR),
         Input::texel(gbuffer::IDS),
     ];
+    inputs.extend(restarts.inputs());
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
     FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, &Params { blend: BLEND, fast_motion: FAST_MOTION })
 }

@@ -85,15 +85,19 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         gi_specular
     };
     let mut diffuse = gi_diffuse;
+    // Where the radiance cache or a pixel's resampled light let go of light that is gone, so do
+    // the denoiser's and TAA's histories.
+    let restarts = history::Restarts {
+        cache_changed: cache_used.then_some(radiance_cache::CHANGED.into()),
+        light_lost: (plan.gi && plan.reservoirs()).then_some(passes::gi::LIGHT_LOST.into()),
+    };
     if settings.denoiser || settings.test_signal {
         passes.push(Box::new(svgf::guide::new(b)?));
     }
     if settings.denoiser {
         // The specular signal of reflection rays follows what they hit when the camera moves.
         let hit_distance = plan.reflections.then_some(passes::reflections::HIT_DISTANCE.into());
-        // Where the radiance cache let go of light that is gone, so does the diffuse history.
-        let cache_changed = cache_used.then_some(radiance_cache::CHANGED.into());
-        let chain = svgf::pair(b, diffuse, specular, hit_distance, cache_changed, &settings.denoise)?;
+        let chain = svgf::pair(b, diffuse, specular, hit_distance, restarts, &settings.denoise)?;
         passes.extend(chain.passes);
         kept.extend(chain.kept);
         (diffuse, specular) = (chain.outputs[0].into(), chain.outputs[1].into());
@@ -115,7 +119,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
     )?));
     let mut hdr_output = passes::composite::COLOR;
     if settings.taa {
-        passes.push(Box::new(passes::taa::new(b, hdr_output.into(), plan.reflections)?));
+        passes.push(Box::new(passes::taa::new(b, hdr_output.into(), plan.reflections, restarts)?));
         kept.extend(passes::taa::kept());
         hdr_output = passes::taa::COLOR;
     }

@@ -16,7 +16,7 @@ pub mod guide;
 pub mod temporal;
 
 use super::PassBuilder;
-use super::history::Kept;
+use super::history::{Kept, Restarts};
 use crate::gpu::vk;
 use crate::graph::{Instance, Output, Pass, Resource};
 use anyhow::Result;
@@ -143,14 +143,14 @@ pub fn pair(
     diffuse: Resource,
     specular: Resource,
     hit_distance: Option<Resource>,
-    cache_changed: Option<Resource>,
+    restarts: Restarts,
     s: &SvgfSettings,
 ) -> Result<Chain> {
     let iterations = s.iterations.max(1);
     let first = iteration(PAIR, 0);
     let filtered = [atrous::DIFFUSE.of(first), atrous::SPECULAR.of(first)];
     let mut passes: Vec<Box<dyn Pass>> =
-        vec![Box::new(temporal::pair(b, (diffuse, specular), filtered, hit_distance, cache_changed, s)?)];
+        vec![Box::new(temporal::pair(b, (diffuse, specular), filtered, hit_distance, restarts, s)?)];
     for i in 0..iterations {
         passes.push(Box::new(atrous::pair(b, i, hit_distance.is_some(), s)?));
     }

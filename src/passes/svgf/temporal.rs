@@ -14,7 +14,8 @@ use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
 use crate::passes::gbuffer;
 use crate::passes::history;
-use crate::passes::{radiance_cache, reflections};
+use crate::passes::history::Restarts;
+use crate::passes::reflections;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_temporal";
@@ -131,15 +132,15 @@ pub fn single(
 /// The temporal stage of the frame's `diffuse` and `specular` signals; `filtered`, the
 /// chain's first a-trous outputs of each. `hit_distance`, where the specular signal is made of
 /// reflection rays (`reflections::HIT_DISTANCE`): their mean hit distance, which moves a narrow
-/// lobe's history with the reflected object rather than the surface. `cache_changed`, where the
-/// frame has a radiance cache (`radiance_cache::CHANGED`): where its cells let go of light that
-/// is gone, which restarts the diffuse history.
+/// lobe's history with the reflected object rather than the surface. `restarts`: where a
+/// radiance cache cell let go of light that is gone, the diffuse history restarts; where a
+/// pixel's resampled light went into shadow, each signal's history to which it brought a share.
 pub fn pair(
     b: &PassBuilder,
     (diffuse, specular): (Resource, Resource),
     filtered: [Output; 2],
     hit_distance: Option<Resource>,
-    cache_changed: Option<Resource>,
+    restarts: Restarts,
     s: &SvgfSettings,
 ) -> Result<FullscreenPass> {
     let run = signal(PAIR);
@@ -158,16 +159,14 @@ pub fn pair(
         },
     ];
     let hit = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
-    let extra = vec![
+    let mut extra = vec![
         match hit_distance {
             Some(h) => hit.reading(h),
             None => hit.reading(graph::zero(vk::Format::R32_SFLOAT, false)),
         },
         Input::texel(gbuffer::METAL_ROUGH),
-        Input::texel(radiance_cache::CHANGED)
-            .bound_as("in_cache_changed")
-            .reading(cache_changed.unwrap_or_else(|| graph::zero(vk::Format::R32_SFLOAT, false))),
     ];
+    extra.extend(restarts.inputs());
     let flags = if hit_distance.is_some() { SHARP_SPECULAR } else { 0 };
     pass(b, run, "svgf_temporal_diffuse_specular.comp", &signals, extra, s, flags)
 }
