@@ -11,11 +11,11 @@
 // chain's SVGF history is, and on glass or a blended surface, whose colour is partly what
 // lies behind them, where whichever of the reflected and the let-through light is the larger
 // was (reflections.hit_distance says which), for its share of the colour; the disocclusion
-// test still asks about the surface. Where the light changed, the history is dropped as SVGF's
-// is: everywhere when the frame says its lights changed, and where a radiance cache cell
-// restarted or the pixel's resampled light went into shadow (an occluder the frame was not
-// told of), else the clamp box of a noisy neighbourhood lets the old light through for TAA's
-// whole window.
+// test still asks about the surface. Where the light changed, the history is dropped: where the
+// frame says its lights changed and the neighbourhood's mean moved away from the history, and
+// where a radiance cache cell restarted or the pixel's resampled light went into shadow (an
+// occluder the frame was not told of); else the clamp box of a noisy neighbourhood lets the old
+// light through for TAA's whole window.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
@@ -49,6 +49,9 @@ layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 // renderer shrinks the jitter by as much as the camera's motion raises the blend
 // (src/passes/taa.rs `jitter_scale`).
 #define FAST_BLEND 1.0
+// On a change of the lights the history is dropped where this frame's 3x3 mean differs from it
+// by more than this share of the larger of the two.
+#define LIGHTS_CHANGED_SHARE 0.1
 
 layout(push_constant) uniform TaaParams {
     float blend;        // weight of the new frame where the image holds still
@@ -89,20 +92,22 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     vec3 cur = imageLoad(in_color, px).rgb;
-    if ((frame.flags & (FRAME_RESET_HISTORY | FRAME_LIGHTS_CHANGED)) != 0u) {
+    if ((frame.flags & FRAME_RESET_HISTORY) != 0u) {
         imageStore(out_color, px, vec4(cur, 1.0));
         return;
     }
     // Clamp box of the current neighbourhood, in YCoCg where it hugs colour better.
-    vec3 lo = vec3(1e30), hi = vec3(-1e30);
+    vec3 lo = vec3(1e30), hi = vec3(-1e30), sum = vec3(0.0);
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), ivec2(frame.size) - 1);
             vec3 y = to_ycocg(imageLoad(in_color, q).rgb);
             lo = min(lo, y);
             hi = max(hi, y);
+            sum += y;
         }
     }
+    float neighbourhood_luma = sum.x / 9.0;
     vec2 motion = imageLoad(g_motion, px).xy;
     vec2 prev_pos = vec2(px) + 0.5 - motion;
     bool valid = all(greaterThanEqual(prev_pos, vec2(0.0))) && all(lessThan(prev_pos, vec2(frame.size)));
@@ -139,6 +144,14 @@ void main() {
         vec3 albedo = imageLoad(g_base_color, px).rgb * (1.0 - metal_rough.x);
         float lost_here = lost.x * luminance(albedo) + lost.y;
         valid = imageLoad(in_cache_changed, px).r == 0.0 && !lost_share_of(lost_here, luminance(hist_rgb));
+        // The lights changed: the history goes where this frame's neighbourhood (denoised, so
+        // its mean is steady) is far from it, and stays, anti-aliased, where the change left
+        // the pixel as it was (a light animated every frame would otherwise leave none).
+        float hist_luma = to_ycocg(hist_rgb).x;
+        if ((frame.flags & FRAME_LIGHTS_CHANGED) != 0u &&
+            abs(neighbourhood_luma - hist_luma) > LIGHTS_CHANGED_SHARE * max(hist_luma, neighbourhood_luma)) {
+            valid = false;
+        }
     }
     if (valid) {
         vec3 hist = to_ycocg(hist_rgb);

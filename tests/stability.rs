@@ -178,7 +178,7 @@ fn moving_object() {
 /// step from frame to frame after it). With gi at half rate: denoised 0.063, raw 0.080 (the raw
 /// frame's one-frame noise against the step, from half the samples); since a pixel without
 /// history starts from its window's mean, denoised 0.042 (0.071 with the 3x3 a-trous kernel
-/// alone); since TAA drops its history on a change of the lights too (2026-12-05), 0.004.
+/// alone); since TAA drops its history on a change of the lights too (2026-12-05), 0.002.
 /// Bounds 0.02 denoised, 0.12 raw, lag 2 frames denoised and 0 raw.
 #[test]
 fn moving_light() {
@@ -190,7 +190,7 @@ fn moving_light() {
 /// raw 0.006 and 0 (0.007 without the radiance cache; 0.065 when the cache's restart traced 3
 /// vertices instead of 6: the white room's deep bounces); since a pixel without history starts
 /// from its window's mean, denoised 0.067; since TAA drops its history on a change of the lights
-/// too (2026-12-05), 0.005. Bounds 0.02 and 2 frames denoised; 0.05 and 0 raw.
+/// too (2026-12-05), 0.004. Bounds 0.02 and 2 frames denoised; 0.05 and 0 raw.
 #[test]
 fn light_off() {
     run("light off", stability::light_off);
@@ -204,7 +204,7 @@ fn light_off() {
 /// two frames are 0.08 of the step high, and the metric's end value (frames 12..15) is 0.046 low,
 /// within the spread of the radiance cache's frame-correlated noise (README, under the stability
 /// table). A light switched off: denoised 0.0004, raw 0.025, 0 frames. Since TAA drops its
-/// history on a change of the lights too (2026-12-05): the moved light 0.033 denoised; the
+/// history on a change of the lights too (2026-12-05): the moved light 0.035 denoised; the
 /// switched one 0.061, the first SVGF frame reading dark (its young history's outlier clamp
 /// drops some of the resampled lights' bright samples), which TAA's held-back light used to
 /// make up for. Bounds 0.06 and 0.16 for the moved light's first frame, 2 frames of lag both

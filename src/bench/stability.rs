@@ -514,8 +514,8 @@ fn moving_light_in(rig: &Rig, mut scene: Scene, denoised: bool, resampled: bool)
     // the step (0.024 with gi at full rate, 0.080 at half rate: half the samples a frame). A
     // resampled light's frame reads 0.12 of the step high for two frames: noise, which the
     // radiance cache correlates over frames, against an end value that is itself noisy (README,
-    // tests/stability.rs). Denoised, since TAA drops its history on a change of the lights as
-    // SVGF does (2026-12-05): 0.004 and 0.033 (0.042 and 0.097 before).
+    // tests/stability.rs). Denoised, since TAA drops its history on a change of the lights
+    // where the light moved off it (2026-12-05): 0.002 and 0.035 (0.042 and 0.097 before).
     let (first_bound, lag_bound) = match (resampled, denoised) {
         (false, true) => (0.02, 2.0),
         (false, false) => (0.12, 0.0),
@@ -604,9 +604,10 @@ fn light_off_in(rig: &Rig, scene: Scene, resampled: bool, denoised: bool) -> Res
         }
     };
     let residual = step_response(&mut r, STEP_FRAMES, switch_off, |_| true, None)?;
-    // Denoised, since TAA drops its history on a change of the lights as SVGF does
-    // (2026-12-05): 0.005 (0.065 before); the resampled lights' 0.061 (0.0004 before, when the
-    // light TAA held back made up for what the young SVGF history's outlier clamp drops).
+    // Denoised, since TAA drops its history on a change of the lights where the light moved
+    // off it (2026-12-05): 0.004 (0.065 before); the resampled lights' 0.061 (0.0004 before,
+    // when the light TAA held back made up for what the young SVGF history's outlier clamp
+    // drops).
     let first_bound = match (resampled, denoised) {
         (false, true) => 0.02,
         (true, true) => 0.095,
