@@ -30,7 +30,7 @@ pub const RESERVOIR: Output = Output::new(NAME, "reservoir");
 const RESERVOIR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// Where last frame's resampled light, visible then, is in shadow now (an occluder the frame was
 /// not told of): the luminance of what it brought to the diffuse (r) and specular (g) signals,
-/// which restarts their SVGF histories (1x1 when no light is resampled).
+/// which restarts their SVGF histories and TAA's (1x1 when no light is resampled).
 pub const LIGHT_LOST: Output = Output::new(NAME, "light_lost");
 
 /// gi.comp's push-constant block.
