@@ -24,7 +24,7 @@
 //   the cut-off the reflection rays find it). The bounce ray hitting an emitter adds no direct
 //   light (the reservoir has it). The reservoir goes to gi.reservoir for the next frame, and
 //   where last frame's choice, lit then, is now in shadow (an occluder the frame was not told
-//   of), what it brought goes to gi.light_lost, so that the denoiser lets go of it too;
+//   of), what it brought goes to gi.light_lost, so that the denoiser and TAA let go of it too;
 // - indirect light (the bounce ray goes straight on through see-through surfaces, as the light
 //   sample's shadow ray does: common/pass_through.glsl): at the bounce ray's hit, next-event
 //   estimation toward a light chosen by power (any kind, with a shadow ray), and the light that

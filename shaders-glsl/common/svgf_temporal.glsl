@@ -5,9 +5,9 @@
 // vectors with bilinear taps that each pass the validity test (on screen, same instance,
 // depth, geometric normal); the new frame is blended in with max(alpha, 1/history). The input
 // is cleaned first: NaN/Inf samples are dropped (and counted) and luminance outliers clamped to
-// mean + k sigma of their 7x7 neighbourhood (5x5 once the history is established, when what
-// the clamp takes out is handed to the neighbours on the pixel's surface: out_*clamped, which
-// the first a-trous iteration adds), so neither poisons the history.
+// mean + k sigma of their 7x7 neighbourhood (5x5 once the history is established), so neither
+// poisons the history; what the clamp takes out is handed to the neighbours on the pixel's
+// surface (out_*clamped, which the first a-trous iteration adds), so no light is lost.
 //
 // A pixel with no history at all takes the edge-aware mean of that 7x7 window (on its own
 // instance) in place of its sample: the a-trous iterations then start from less noise after a
@@ -200,7 +200,7 @@ struct Neighbourhood {
 // bound is found first and the window read twice only then) and, with `blur` (no history at
 // all), the edge-aware mean of the clamped samples on this pixel's instance.
 //
-// With an established history the clamp keeps the firefly's energy (the give-back, below), and
+// The clamp keeps the firefly's energy (the give-back, below). With an established history
 // its bound leaves the window's brightest sample out, so that a bright sample's neighbours do
 // not judge it by a window that holds it. Its window is then 5x5: a smaller window clamps
 // more, which cost light while the clamp dropped what it took, and now only saves time.
@@ -303,8 +303,7 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
     }
 }
 
-// The give-back: what the clamp takes out of an established history's sample is handed in even
-// shares to the neighbours on its surface (svgf_same_surface) among the 8 around it, which the
+// The give-back: what the clamp takes out of a sample is handed in even shares to the neighbours on its surface (svgf_same_surface) among the 8 around it, which the
 // first a-trous iteration adds to its output (the colour the next frame's history is made
 // of). Each share is in the history's units, scaled by the weight `a` the sample would have had
 // in it, so the light the history lost is the light its neighbours gain, exactly; a pixel
@@ -319,6 +318,11 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
 // a-trous iteration 2.5 ms slower at 640x360 on lavapipe. main() computes the clamp and the
 // excess without branches and gives in one branch after both signals: with a branch per
 // signal around the clamp the pass was still about 3 ms slower than without the give-back.
+// Until 2026-12-05 only an established history gave: a young one (a disocclusion, a restart,
+// and always a mirror's, capped at GLOSSY_HISTORY_CAP frames) dropped what its clamp took.
+// Giving there too took the Mitsuba glossy box from 0.975 to 0.984 of Mitsuba's light,
+// DamagedHelmet from 0.87 to 0.92 of the reference's and a resampled light's first frame
+// after it was switched off from 0.061 to 0.042 of the step dark (README, "Stability").
 float same_surface_neighbours(ivec2 px) {
     vec4 g = tile_guide[tile_index(ivec2(0))];
     float n = 0.0;
@@ -455,7 +459,7 @@ void main() {
     }
     Neighbourhood nb[SIGNALS];
     neighbourhood(px, tile_guide[tile_index(ivec2(0))], id, fw, c, young, blur, nb);
-    vec3 excess[SIGNALS];  // what the clamp takes out, where an established history gives it on
+    vec3 excess[SIGNALS];  // what the clamp takes out, which the pixel gives on
     bool gives = false;
     vec4 texel[SIGNALS];
     vec2 moments[SIGNALS];
@@ -463,8 +467,8 @@ void main() {
         vec3 cs = c[s];
         float l = luminance(cs);
         float kept = l > nb[s].clamp_limit && l > 0.0 ? nb[s].clamp_limit / l : 1.0;
-        excess[s] = young[s] ? vec3(0.0) : cs * ((1.0 - kept) * max(svgf.alpha, 1.0 / len[s]));
-        gives = gives || kept < 1.0 && !young[s];
+        excess[s] = cs * ((1.0 - kept) * max(svgf.alpha, 1.0 / len[s]));
+        gives = gives || kept < 1.0;
         cs *= kept;
         // No history at all (a disocclusion, a camera cut, changed lights): the sample is
         // replaced by the edge-aware mean of its 7x7 window on the same instance, which the

@@ -515,11 +515,14 @@ fn moving_light_in(rig: &Rig, mut scene: Scene, denoised: bool, resampled: bool)
     // resampled light's frame reads 0.12 of the step high for two frames: noise, which the
     // radiance cache correlates over frames, against an end value that is itself noisy (README,
     // tests/stability.rs). Denoised, since TAA drops its history on a change of the lights
-    // where the light moved off it (2026-12-05): 0.002 and 0.035 (0.042 and 0.097 before).
+    // where the light moved off it (2026-12-05): 0.002 and 0.035 (0.042 and 0.097 before);
+    // since a young SVGF history's outlier clamp hands on what it takes (the same day), 0.004
+    // and 0.063: the denoised frame keeps more of the raw frame's light, and with it more of
+    // the raw frame's two high frames.
     let (first_bound, lag_bound) = match (resampled, denoised) {
         (false, true) => (0.02, 2.0),
         (false, false) => (0.12, 0.0),
-        (true, true) => (0.06, 2.0),
+        (true, true) => (0.08, 2.0),
         (true, false) => (0.16, 2.0),
     };
     Ok(vec![
@@ -581,8 +584,9 @@ fn occluder_in(rig: &Rig, resampled: bool, denoised: bool) -> Result<Vec<Measure
     // the pixel did (denoised: 0.341 and 0.079, 0.758 and 0.212; 0.628 and 0.249, 0.951 and
     // 0.446 without, 0.650 and 0.367, 0.954 and 0.523 with neither), and SVGF's and TAA's
     // histories restart where the cells did or the pixel's resampled light went into shadow
-    // (0.257 and 0.071, 0.531 and 0.159). The bounds are the measurement with a margin; they
-    // fail without the restarts.
+    // (0.257 and 0.071, 0.531 and 0.159; 0.273 and 0.077, 0.546 and 0.166 since a young SVGF
+    // history's outlier clamp hands on what it takes, some of it light the cells still hold).
+    // The bounds are the measurement with a margin; they fail without the restarts.
     let (first_bound, later_bound) = match (resampled, denoised) {
         (false, true) => (0.32, 0.1),
         (false, false) => (0.25, 0.1),
@@ -607,10 +611,10 @@ fn light_off_in(rig: &Rig, scene: Scene, resampled: bool, denoised: bool) -> Res
     // Denoised, since TAA drops its history on a change of the lights where the light moved
     // off it (2026-12-05): 0.004 (0.065 before); the resampled lights' 0.061 (0.0004 before,
     // when the light TAA held back made up for what the young SVGF history's outlier clamp
-    // drops).
+    // dropped), and 0.042 since that clamp hands on what it takes (the same day).
     let first_bound = match (resampled, denoised) {
         (false, true) => 0.02,
-        (true, true) => 0.095,
+        (true, true) => 0.06,
         (_, false) => 0.05,
     };
     Ok(vec![
