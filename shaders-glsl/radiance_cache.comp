@@ -179,23 +179,15 @@ void update(uint slot) {
     rc_cells[slot].radiance[write] = mean;
 }
 
-// Whether a cell around p restarted this frame: p's own or one of the other three of the four
-// nearest in the plane of its normal's dominant axis (rc_blend's). About half the cells of a
+// Whether a cell around p restarted this frame: one of the four of its lattice square
+// (rc_lattice, as rc_blend reads). About half the cells of a
 // region whose light changed notice it, so one cell's restart stands for its neighbours'
 // surfaces too; a still scene restarts none.
 bool restarted_near(vec3 p, vec3 n) {
-    float cell = rc_cell_size(p);
-    uint bucket = rc_normal_bucket(n);
-    uint axis = bucket / 2u;
-    uint u = axis == 0u ? 1u : 0u, v = axis == 2u ? 1u : 2u;
-    vec3 g = p / cell;
-    ivec2 base = ivec2(floor(vec2(g[u], g[v]) - 0.5));
+    RcLattice lattice = rc_lattice(p, n);
     bool any_restarted = false;
     [[unroll]] for (int i = 0; i < 4; ++i) {
-        ivec3 c = ivec3(floor(g));
-        c[u] = base.x + (i & 1);
-        c[v] = base.y + (i >> 1);
-        uint slot = rc_find_key(rc_cell_key(c, cell, bucket), false);
+        uint slot = rc_find_key(rc_cell_key(rc_lattice_cell(lattice, i), lattice.cell, lattice.bucket), false);
         any_restarted = any_restarted || slot != RC_NONE && rc_cells[slot].restart.x == frame.frame_index + 1u;
     }
     return any_restarted;

@@ -193,6 +193,45 @@ struct RcCandidate {
     bool empty;  // no answer because the cell holds no light yet (its slot taken, no samples)
 };
 
+// The four cells around p in the plane of its normal's dominant axis (p's own among them),
+// which rc_blend reads bilinearly and radiance_cache.comp's restart test asks: the cells whose
+// centres' lattice square holds p.
+struct RcLattice {
+    float cell;     // the cells' size at p
+    uint bucket;    // p's normal bucket
+    uint u, v;      // the two in-plane axes
+    ivec3 own;      // p's own cell
+    ivec2 base;     // the square's first corner on the lattice of centres along u, v
+    vec2 f;         // p's position in the square
+};
+
+RcLattice rc_lattice(vec3 p, vec3 n) {
+    RcLattice l;
+    l.cell = rc_cell_size(p);
+    l.bucket = rc_normal_bucket(n);
+    uint axis = l.bucket / 2u;
+    l.u = axis == 0u ? 1u : 0u;
+    l.v = axis == 2u ? 1u : 2u;
+    vec3 g = p / l.cell;
+    l.own = ivec3(floor(g));
+    vec2 f = vec2(g[l.u], g[l.v]) - 0.5;
+    l.base = ivec2(floor(f));
+    l.f = f - vec2(l.base);
+    return l;
+}
+
+// The square's corner i (0..3): its cell, and its bilinear weight at p.
+ivec3 rc_lattice_cell(RcLattice l, int i) {
+    ivec3 c = l.own;
+    c[l.u] = l.base.x + (i & 1);
+    c[l.v] = l.base.y + (i >> 1);
+    return c;
+}
+
+float rc_lattice_weight(RcLattice l, int i) {
+    return ((i & 1) == 1 ? l.f.x : 1.0 - l.f.x) * ((i >> 1) == 1 ? l.f.y : 1.0 - l.f.y);
+}
+
 // Blending, for queries whose answer a pixel shows unfiltered (a mirror's reflection): the
 // cells are read bilinearly in the surface's plane, so that the reflection of a wall is not a
 // mosaic of one value per cell. Of the four cells around p in the plane of its normal's
@@ -204,31 +243,20 @@ struct RcCandidate {
 // cell's point is checked by a visibility ray). Four lookups, no ray.
 #define RC_BLEND_RANGE 4.0
 vec3 rc_blend(vec3 p, vec3 n, uint copy, vec3 home) {
-    float cell = rc_cell_size(p);
-    uint bucket = rc_normal_bucket(n);
-    uint axis = bucket / 2u;
-    // The two in-plane axes, and p's position on the lattice of cell centres along them.
-    uint u = axis == 0u ? 1u : 0u, v = axis == 2u ? 1u : 2u;
-    vec3 g = p / cell;
-    ivec3 own = ivec3(floor(g));
-    vec2 f = vec2(g[u], g[v]) - 0.5;
-    ivec2 base = ivec2(floor(f));
-    f -= vec2(base);
+    RcLattice lattice = rc_lattice(p, n);
     float home_l = luminance(home);
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
     [[unroll]] for (int i = 0; i < 4; ++i) {
-        ivec3 c = own;
-        c[u] = base.x + (i & 1);
-        c[v] = base.y + (i >> 1);
-        float w = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+        ivec3 c = rc_lattice_cell(lattice, i);
+        float w = rc_lattice_weight(lattice, i);
         vec3 value = home;
-        if (c != own) {
-            uint slot = rc_find_key(rc_cell_key(c, cell, bucket), false);
+        if (c != lattice.own) {
+            uint slot = rc_find_key(rc_cell_key(c, lattice.cell, lattice.bucket), false);
             if (slot == RC_NONE || rc_cells[slot].normal.w == 0.0) continue;
             vec4 radiance = rc_cells[slot].radiance[copy];
             float l = luminance(radiance.rgb);
-            bool near_plane = abs(dot(rc_cells[slot].point.xyz - p, n)) <= 0.5 * cell;
+            bool near_plane = abs(dot(rc_cells[slot].point.xyz - p, n)) <= 0.5 * lattice.cell;
             bool alike = l <= RC_BLEND_RANGE * home_l && home_l <= RC_BLEND_RANGE * l;
             if (!(radiance.a > 0.0) || !near_plane || !alike) continue;
             value = radiance.rgb;
