@@ -256,7 +256,8 @@ fn half_rate_gi_fill_takes_the_mean_of_traced_neighbours() {
     common::assert_validation_clean(ctx);
 }
 
-/// Measured (lavapipe, 2026-12-04, gi at half rate): cache on 0.9877, cache off 0.725 since the
+/// Measured (lavapipe, 2026-12-05, gi at half rate): cache on 0.9886 since a young SVGF
+/// history's outlier clamp hands on what it takes; 2026-12-04: 0.9877, cache off 0.725 since the
 /// emitters joined gi's reservoirs (0.9976 and 0.730 before; 0.9995 and 0.734 with the exact
 /// give-back alone; 2026-12-03: 0.9966; 0.9915 with an established history's outlier bound at 4
 /// sigma, 0.989 before the clamp kept the fireflies' light) (0.985 at full rate; 0.977 before young
@@ -266,18 +267,20 @@ fn diffuse_box_converges_to_mitsubas_energy() {
     check_energy("diffuse_box", 0.03, true);
 }
 
-/// Measured (2026-12-04): cache on 0.975 with SVGF and TAA and gi at half rate since the
+/// Measured (2026-12-05): cache on 0.984 with SVGF and TAA and gi at half rate, since a young
+/// SVGF history's outlier clamp hands on what it takes too. 2026-12-04: 0.975 since the
 /// emitters joined gi's reservoirs (0.988 just before, since the
 /// outlier clamp hands on exactly what it takes and the a-trous iterations leave converged
 /// taps out (0.982 with the first alone; 2026-12-03: 0.972, 0.964 with an
 /// established history's outlier bound at 4 sigma, not 8); 0.945 before
 /// SVGF's outlier clamp kept the light it takes out of the rare bright paths through the metal
 /// and glossy blocks (0.922 at full rate, whose samples stand out more to the clamps); 0.99-1.01
-/// raw over four seeds (README Known gaps); cache off 0.62. Bound 4%, which a cache that
-/// stopped carrying the bounces after the first fails.
+/// raw over four seeds (README Known gaps); cache off 0.62. Bound 3% (4% until 2026-12-05,
+/// when 0.975 was measured), which a cache that stopped carrying the bounces after the first
+/// fails, and so does a denoiser that drops a young history's clamped light again (0.975).
 #[test]
 fn glossy_blocks_converge_to_mitsubas_energy() {
-    check_energy("glossy_blocks", 0.04, false);
+    check_energy("glossy_blocks", 0.03, false);
 }
 
 /// A mirror shows the cache's answer at its reflection's hit in a pixel that no spatial filter
