@@ -277,7 +277,7 @@ fn diffuse_box_converges_to_mitsubas_energy() {
 /// and glossy blocks (0.922 at full rate, whose samples stand out more to the clamps); 0.99-1.01
 /// raw over four seeds (README Known gaps); cache off 0.62. Bound 3% (4% until 2026-12-05,
 /// when 0.975 was measured), which a cache that stopped carrying the bounces after the first
-/// fails, and so does a denoiser that drops a young history's clamped light again (0.975).
+/// fails.
 #[test]
 fn glossy_blocks_converge_to_mitsubas_energy() {
     check_energy("glossy_blocks", 0.03, false);
