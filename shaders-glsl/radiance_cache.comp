@@ -180,9 +180,9 @@ void update(uint slot) {
 }
 
 // Whether a cell around p restarted this frame: one of the four of its lattice square
-// (rc_lattice, as rc_blend reads). About half the cells of a
-// region whose light changed notice it, so one cell's restart stands for its neighbours'
-// surfaces too; a still scene restarts none.
+// (rc_lattice, as rc_blend reads). About half the cells of a region whose light changed notice
+// it, so one cell's restart stands for its neighbours' surfaces too; a still scene restarts
+// none.
 bool restarted_near(vec3 p, vec3 n) {
     RcLattice lattice = rc_lattice(p, n);
     bool any_restarted = false;

@@ -303,11 +303,12 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
     }
 }
 
-// The give-back: what the clamp takes out of a sample is handed in even shares to the neighbours on its surface (svgf_same_surface) among the 8 around it, which the
-// first a-trous iteration adds to its output (the colour the next frame's history is made
-// of). Each share is in the history's units, scaled by the weight `a` the sample would have had
-// in it, so the light the history lost is the light its neighbours gain, exactly; a pixel
-// without a neighbour on its surface (a surface a pixel wide) keeps none of it. Until
+// The give-back: what the clamp takes out of a sample is handed in even shares to the
+// neighbours on its surface (svgf_same_surface) among the 8 around it, which the first a-trous
+// iteration adds to its output (the colour the next frame's history is made of). Each share
+// is in the history's units, scaled by the weight `a` the sample would have had in it, so the
+// light the history lost is the light its neighbours gain, exactly; a pixel without a
+// neighbour on its surface (a surface a pixel wide) keeps none of it. Until
 // 2026-12-04 each pixel took back a share of the clamped light of the brightest neighbour on
 // its surface, estimated against its own bound: where many pixels pass their bounds (gi at
 // full rate: 6% of the pixels holding a quarter of the light) that returned about half.
