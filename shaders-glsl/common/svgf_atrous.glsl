@@ -7,7 +7,7 @@
 //
 // 3x3 rather than Schied et al.'s 5x5 B3 spline because the filter is bound by its loads:
 // 8 taps a signal instead of 24. The variance is prefiltered over the 3x3 neighbourhood as in
-// the paper, and at step 1 those are the kernel's own taps, so they are loaded once. On
+// the paper in the first iteration, whose taps those are, and not after (main). On
 // lavapipe the four iterations cost 40% less than with the 5x5 kernel, at the same or lower
 // error after 64 frames. Four 3x3 iterations reach 15 pixels, four 5x5 ones 30: where that
 // mattered, a pixel without history, svgf_temporal starts it from its 7x7 window's mean. A
@@ -29,7 +29,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 // Colour in rgb, the standard deviation of its luminance in alpha (svgf_temporal, or the
-// previous iteration; svgf_pack). load_signal and store_signal work with the variance.
+// previous iteration; svgf_pack). svgf_unpack and store_signal work with the variance.
 #ifdef SVGF_PAIR
 #define SIGNALS 2
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_diffuse;
@@ -78,8 +78,6 @@ vec3 load_clamped(int s, ivec2 q) { return imageLoad(in_clamped, q).rgb; }
 void store_texel(int s, ivec2 q, vec4 texel) { imageStore(out_color, q, texel); }
 #endif
 
-vec4 load_signal(int s, ivec2 q) { return svgf_unpack(load_texel(s, q)); }
-
 // Colour and variance `v` of a pixel whose history is `history_length` frames long, flagged
 // converged for the next iteration (svgf_flag).
 void store_signal(int s, ivec2 q, vec4 v, float history_length) {
@@ -92,24 +90,6 @@ const float KERNEL[2] = float[2](1.0, 0.5);
 #define TAPS 8
 
 bool inside(ivec2 q) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size))); }
-
-// The variance prefilter beyond step 1: the same 3x3 Gaussian over the surface pixels around
-// px, loaded apart from the kernel's taps, each neighbour's guide texel once for every signal.
-void prefilter_variance(ivec2 px, vec4 c_p[SIGNALS], out float variance[SIGNALS]) {
-    float wsum = 1.0;
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] = c_p[s].a;
-    [[unroll]] for (int i = 0; i < TAPS; ++i) {
-        int j = i < 4 ? i : i + 1;
-        ivec2 d = ivec2(j % 3, j / 3) - 1;
-        ivec2 q = px + d;
-        if (inside(q) && svgf_guide_surface(imageLoad(in_guide, q))) {
-            float k = KERNEL[abs(d.x)] * KERNEL[abs(d.y)];
-            [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] += k * load_signal(s, q).a;
-            wsum += k;
-        }
-    }
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] /= wsum;
-}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -146,7 +126,7 @@ void main() {
     }
     // Each tap is loaded once: its geometry exponent (depth and normal, and the kernel as
     // -log k) and, at step 1, the variance's prefilter first; then the luminance weight, which
-    // needs the prefiltered variance. (No `continue` in this loop: with one, the iteration cost
+    // needs the variance. (No `continue` in this loop: with one, the iteration cost
     // twice as much on lavapipe, most likely because the taps then stayed in memory rather
     // than in registers; not confirmed in its compiled code.)
     float z_scale = svgf.sigma_z * imageLoad(g_depth, px).g * float(svgf.step);
@@ -189,12 +169,13 @@ void main() {
             }
         }
     }
+    // The variance is prefiltered at step 1 only, where the taps are its 3x3 neighbours. The
+    // later iterations take the pixel's own: the first iteration has already averaged it over
+    // those neighbours (its squared weights), and a prefilter of their own loaded a second 3x3
+    // neighbourhood, a fifth of each iteration's cost, for an error that `bench sweep` measured
+    // the same without it (README, "The variance prefiltered once").
     float variance[SIGNALS];
-    if (svgf.step == 1) {
-        [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] = var_sum[s] / var_wsum;
-    } else {
-        prefilter_variance(px, c_p, variance);
-    }
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) variance[s] = svgf.step == 1 ? var_sum[s] / var_wsum : c_p[s].a;
     // A converged tap is left out: it keeps its own value in this iteration, so light that this
     // pixel took from it would not flow back, and a pixel whose noise has not converged is more
     // often one that has just taken a bright sample: with converged taps in, the iterations
