@@ -178,7 +178,8 @@ fn moving_object() {
 /// step from frame to frame after it). With gi at half rate: denoised 0.063, raw 0.080 (the raw
 /// frame's one-frame noise against the step, from half the samples); since a pixel without
 /// history starts from its window's mean, denoised 0.042 (0.071 with the 3x3 a-trous kernel
-/// alone); since TAA drops its history on a change of the lights too (2026-12-05), 0.002.
+/// alone); since TAA drops its history on a change of the lights too (2026-12-05), 0.002, and
+/// 0.004 once a young history's outlier clamp handed on what it takes (the same day).
 /// Bounds 0.02 denoised, 0.12 raw, lag 2 frames denoised and 0 raw.
 #[test]
 fn moving_light() {
@@ -190,7 +191,8 @@ fn moving_light() {
 /// raw 0.006 and 0 (0.007 without the radiance cache; 0.065 when the cache's restart traced 3
 /// vertices instead of 6: the white room's deep bounces); since a pixel without history starts
 /// from its window's mean, denoised 0.067; since TAA drops its history on a change of the lights
-/// too (2026-12-05), 0.004. Bounds 0.02 and 2 frames denoised; 0.05 and 0 raw.
+/// too (2026-12-05), 0.004, and 0.001 once a young history's outlier clamp handed on what it
+/// takes (the same day). Bounds 0.02 and 2 frames denoised; 0.05 and 0 raw.
 #[test]
 fn light_off() {
     run("light off", stability::light_off);
@@ -294,7 +296,8 @@ fn grazing_floor() {
 /// only through the hot spot of a tiny very bright emitter. Measured: denoised 0 and 25 (31 before
 /// the clamp kept the fireflies' light, 2026-12-03; 28 since), raw 0.092 and 458 (0.104 and 425
 /// since path vertices take caustics through specular surfaces, sampled as sparks; 0.114 and 528
-/// since the emitters joined gi's reservoirs, 2026-12-04, and the denoised peak 7: the raw count
+/// since the emitters joined gi's reservoirs, 2026-12-04, and the denoised peak 7, 8.2 since the
+/// later a-trous iterations stopped prefiltering the variance, 2026-12-05: the raw count
 /// rose at the other sizes tried too, 0.098 -> 0.103 at 56x56 and 0.102 -> 0.114 at 64x64, not
 /// explained; the emitter faces the ceiling, away from every surface in view). Without the radiance
 /// cache raw measured 0.011: with it a pixel shows its gi ray's cell, and after 8 frames a cell
