@@ -1,9 +1,9 @@
 // svgf_atrous (svgf_atrous.comp: one signal; svgf_atrous_diffuse_specular.comp: the frame's two,
 // SVGF_PAIR): one iteration of the edge-avoiding a-trous wavelet filter, a 3x3 kernel
 // [1/4 1/2 1/4]^2 with holes (step 2^i), weighted by depth (scaled by the surface's depth slope),
-// shading normal (sigma_n; see svgf_normal_exponent) and luminance (scaled by the prefiltered
-// standard deviation). Colour is filtered with the weights, variance (from the colour's alpha)
-// with their squares, so the next iteration stops at the right edges.
+// shading normal (sigma_n; see svgf_normal_exponent) and luminance (scaled by the standard
+// deviation, prefiltered in the first iteration). Colour is filtered with the weights, variance
+// (from the colour's alpha) with their squares, so the next iteration stops at the right edges.
 //
 // 3x3 rather than Schied et al.'s 5x5 B3 spline because the filter is bound by its loads:
 // 8 taps a signal instead of 24. The variance is prefiltered over the 3x3 neighbourhood as in
