@@ -25,7 +25,7 @@ layout(push_constant) uniform CompositeParams {
 } cp;
 
 layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 1, rgba32f) uniform readonly image2D g_normal;
 layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 3, rgba8) uniform readonly image2D g_metal_rough;
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D g_emissive;

@@ -16,7 +16,7 @@ layout(location = 7) flat in uint in_instance;
 
 layout(location = 0) out vec2 out_depth;        // gbuffer.depth: view depth (along the view axis), its fwidth
 layout(location = 1) out vec4 out_normal_geo;   // gbuffer.normal_geo: world geometric normal, facing the viewer
-layout(location = 2) out vec4 out_normal;       // gbuffer.normal: world shading normal (normal-mapped)
+layout(location = 2) out vec4 out_normal;       // gbuffer.normal: world shading normal (normal-mapped), view depth
 layout(location = 3) out vec4 out_base_color;   // gbuffer.base_color: linear RGB, alpha
 layout(location = 4) out vec4 out_metal_rough;  // gbuffer.metal_rough: metallic, roughness, occlusion, transmission
 layout(location = 5) out vec4 out_emissive;     // gbuffer.emissive: emitted radiance
@@ -55,7 +55,7 @@ void main() {
     // sliver between two other surfaces, where neighbouring pixels would give the jump.
     out_depth = vec2(depth, fwidth(depth));
     out_normal_geo = vec4(ng, 0.0);
-    out_normal = vec4(n, 0.0);
+    out_normal = vec4(n, depth);
     out_base_color = s.base_color;
     out_metal_rough = vec4(s.metallic, s.roughness, s.occlusion, s.transmission);
     out_emissive = vec4(s.emissive, 0.0);

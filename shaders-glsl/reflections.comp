@@ -30,7 +30,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;
-layout(set = 1, binding = 1, rgba16f) uniform readonly image2D g_normal;
+layout(set = 1, binding = 1, rgba32f) uniform readonly image2D g_normal;
 layout(set = 1, binding = 2, rgba16f) uniform readonly image2D g_normal_geo;
 layout(set = 1, binding = 3, rgba16f) uniform readonly image2D g_base_color;
 layout(set = 1, binding = 4, rgba8) uniform readonly image2D g_metal_rough;

@@ -54,6 +54,8 @@ fn gbuffer_matches_analytic_plane_sphere_and_motion() {
             assert_ne!(id, NO_ID, "the plane covers the whole view");
             let dir = view.ray_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), size);
             let d = depth.get(x, y, 0);
+            // The SVGF passes weigh their taps by the normal and this depth in one texel.
+            assert_eq!(normal.get(x, y, 3), d, "gbuffer.normal's alpha is the view depth at ({x},{y})");
             match id {
                 facts::PLANE_INSTANCE => {
                     plane_px += 1;

@@ -1,6 +1,6 @@
-// Shared by the SVGF passes (svgf_guide, svgf_temporal, svgf_atrous): settings,
-// the reprojection validity test, the edge-stopping weights of Schied et al. 2017, and the
-// guide texel they read them from.
+// Shared by the SVGF passes (svgf_temporal, svgf_atrous): settings, the reprojection validity
+// test, the edge-stopping weights of Schied et al. 2017, and the guide texel they read them
+// from.
 #ifndef SVGF_GLSL
 #define SVGF_GLSL
 
@@ -120,14 +120,13 @@ const float SVGF_FLAG_MIN_DEVIATION = 1e-4;
 vec4 svgf_flag(vec4 texel) { return vec4(texel.rgb, -max(texel.a, SVGF_FLAG_MIN_DEVIATION)); }
 bool svgf_flagged(vec4 texel) { return texel.a < 0.0; }
 
-// What the a-trous weights read of a neighbour, written by svgf_guide into one rgba32f texel so
-// that each of the filter's taps loads one texel instead of three (depth, normal, ids): the
-// shading normal in xyz, the view depth in w, -1 where there is no surface.
-vec4 svgf_guide_pack(float depth, vec3 n, uint instance) {
-    return instance == NO_INSTANCE ? vec4(0.0, 0.0, 1.0, -1.0) : vec4(n, depth);
-}
-
-bool svgf_guide_surface(vec4 guide) { return guide.w >= 0.0; }
+// What the edge-stopping weights read of a neighbour, the guide texel, is gbuffer.normal: the
+// shading normal in xyz and the view depth in w (0 where there is no surface, the clear value),
+// so that each of the a-trous filter's taps loads one texel for its depth and normal weights.
+// The rasteriser writes the depth beside the normal; until 2026-12-05 a pass of its own,
+// svgf_guide, packed the two (and the ids) into a texel of its own, which cost a full-screen
+// pass a frame (README, "The guide written by the rasteriser").
+bool svgf_guide_surface(vec4 guide) { return guide.w > 0.0; }
 
 // Are the surface pixels with guide texels a and b on one surface, for the outlier clamp's
 // give-back (svgf_temporal, svgf_atrous): shading normals within 25 degrees, view depths within

@@ -15,7 +15,7 @@
 // for a frame (README, "A 3x3 a-trous kernel").
 //
 // The pair filters diffuse and specular in one dispatch: each tap's guide texel (depth, normal,
-// whether there is a surface; svgf_guide) is loaded and its depth and normal weights computed
+// whether there is a surface: gbuffer.normal) is loaded and its depth and normal weights computed
 // once for both, and the filter costs little more than one signal's. A reflection signal's
 // footprint narrows with the roughness (svgf_footprint): a mirror's reflection stays sharp.
 #ifndef SVGF_ATROUS_GLSL
@@ -36,7 +36,7 @@ layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_diffuse;
 layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_specular;
 layout(set = 1, binding = 2, r32f) uniform readonly image2D in_diffuse_history_length;
 layout(set = 1, binding = 3, r32f) uniform readonly image2D in_specular_history_length;
-layout(set = 1, binding = 4, rgba32f) uniform readonly image2D in_guide;
+layout(set = 1, binding = 4, rgba32f) uniform readonly image2D g_normal;  // shading normal, view depth (0: no surface)
 layout(set = 1, binding = 5, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 layout(set = 1, binding = 6, rgba8) uniform readonly image2D g_metal_rough;
 // reflections.hit_distance (a zero image without SVGF_SHARP_SPECULAR): svgf_lobe_roughness.
@@ -65,7 +65,7 @@ void store_texel(int s, ivec2 q, vec4 texel) {
 #define SIGNALS 1
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_color;
 layout(set = 1, binding = 1, r32f) uniform readonly image2D in_history_length;
-layout(set = 1, binding = 2, rgba32f) uniform readonly image2D in_guide;
+layout(set = 1, binding = 2, rgba32f) uniform readonly image2D g_normal;  // shading normal, view depth (0: no surface)
 layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 // svgf_temporal's give-back (read at step 1 only, where flagged; a 1x1 zero image after).
 layout(set = 1, binding = 4, rgba16f) uniform readonly image2D in_clamped;
@@ -94,7 +94,7 @@ bool inside(ivec2 q) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
-    vec4 g = imageLoad(in_guide, px);
+    vec4 g = imageLoad(g_normal, px);
     vec4 texel_p[SIGNALS], c_p[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         texel_p[s] = load_texel(s, px);
@@ -152,7 +152,7 @@ void main() {
             c_q[i][s] = vec4(0.0);
             settled[i][s] = false;
         }
-        vec4 gq = inside(q) ? imageLoad(in_guide, q) : vec4(-1.0);
+        vec4 gq = inside(q) ? imageLoad(g_normal, q) : vec4(0.0);
         if (svgf_guide_surface(gq)) {
             float e = svgf_depth_exponent(g.w, gq.w, 1.0 / (z_scale * length(vec2(d)) + 1e-4)) +
                       svgf_normal_exponent(g.xyz, gq.xyz);

@@ -55,8 +55,9 @@ layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_motion;
 layout(set = 1, binding = 4, rg32f) uniform readonly image2D prev_depth;
 layout(set = 1, binding = 5, rgba16f) uniform readonly image2D prev_normal_geo;
 layout(set = 1, binding = 6, rg32ui) uniform readonly uimage2D prev_ids;
-// svgf_guide: shading normal and view depth (w < 0: no surface), for the spatial variance.
-layout(set = 1, binding = 7, rgba32f) uniform readonly image2D in_guide;
+// The shading normal and view depth (w 0: no surface; svgf_guide_surface), for the spatial
+// variance.
+layout(set = 1, binding = 7, rgba32f) uniform readonly image2D g_normal;
 // Per signal: this frame's samples (rgba32f), the previous frame's filtered colour (the first
 // a-trous iteration's), moments and history length; then the outputs.
 #ifdef SVGF_PAIR
@@ -169,7 +170,7 @@ void load_tile() {
     ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - WINDOW_RADIUS;
     for (uint i = gl_LocalInvocationIndex; i < TILE_SIDE * TILE_SIDE; i += 64u) {
         ivec2 q = clamp(origin + ivec2(i % TILE_SIDE, i / TILE_SIDE), ivec2(0), ivec2(frame.size) - 1);
-        tile_guide[i] = imageLoad(in_guide, q);
+        tile_guide[i] = imageLoad(g_normal, q);
         [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
             vec3 v;
             load_finite(s, q, v);

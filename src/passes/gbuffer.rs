@@ -29,7 +29,7 @@ pub const ZBUFFER: Output = Output::new(NAME, "zbuffer");
 const OUTPUTS: [(Output, vk::Format, Preview); 8] = [
     (DEPTH, vk::Format::R32G32_SFLOAT, Preview::Depth),
     (NORMAL_GEO, vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
-    (NORMAL, vk::Format::R16G16B16A16_SFLOAT, Preview::Normal),
+    (NORMAL, vk::Format::R32G32B32A32_SFLOAT, Preview::Normal),
     (BASE_COLOR, vk::Format::R16G16B16A16_SFLOAT, Preview::Color),
     (METAL_ROUGH, vk::Format::R8G8B8A8_UNORM, Preview::Color),
     (EMISSIVE, vk::Format::R16G16B16A16_SFLOAT, Preview::Color),

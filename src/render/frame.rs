@@ -1,7 +1,7 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
 //! gbuffer -> [primary_rays] -> shadows chain -> [light_grid_update] -> [radiance_cache] -> gi -> [gi_fill] -> reflections ->
-//! [svgf_guide, svgf chains: diffuse on gi, specular on reflections, filtered together] ->
+//! [svgf chains: diffuse on gi, specular on reflections, filtered together] ->
 //! composite -> [taa] -> tonemap -> history.
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
 
@@ -91,9 +91,6 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         cache_changed: cache_used.then_some(radiance_cache::CHANGED.into()),
         light_lost: (plan.gi && plan.reservoirs()).then_some(passes::gi::LIGHT_LOST.into()),
     };
-    if settings.denoiser || settings.test_signal {
-        passes.push(Box::new(svgf::guide::new(b)?));
-    }
     if settings.denoiser {
         // The specular signal of reflection rays follows what they hit when the camera moves.
         let hit_distance = plan.reflections.then_some(passes::reflections::HIT_DISTANCE.into());

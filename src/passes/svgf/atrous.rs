@@ -4,7 +4,7 @@
 //! each tap's guide texel and depth and normal weights; any other signal on its own,
 //! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
-use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, guide, iteration, temporal};
+use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, iteration, temporal};
 use crate::gpu::vk;
 use crate::graph::{self, Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
@@ -30,7 +30,7 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
     let inputs = vec![
         Input::texel(color),
         Input::texel(temporal::HISTORY_LENGTH.of(super::signal(signal))),
-        Input::texel(guide::GUIDE),
+        Input::texel(gbuffer::NORMAL),
         Input::texel(gbuffer::DEPTH),
         give_back(temporal::CLAMPED.of(super::signal(signal)), i),
     ];
@@ -54,7 +54,7 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
         Input::texel(specular).bound_as("in_specular"),
         Input::texel(temporal::DIFFUSE_HISTORY_LENGTH.of(pair)),
         Input::texel(temporal::SPECULAR_HISTORY_LENGTH.of(pair)),
-        Input::texel(guide::GUIDE),
+        Input::texel(gbuffer::NORMAL),
         Input::texel(gbuffer::DEPTH),
         Input::texel(gbuffer::METAL_ROUGH),
         if sharp_specular { hit } else { hit.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },

@@ -8,11 +8,10 @@
 //! `svgf_atrous_<signal>_<i>`. Each stage is a pass instance with its own named outputs, so
 //! `--dump-passes` shows the chain step by step. The first a-trous iteration's colour, and the
 //! temporal moments and history length, are kept for the next frame by the `history` pass.
-//! `svgf_guide` packs what the a-trous weights read of the G-buffer once per frame; the frame
-//! runs it before the chains.
+//! What the edge-stopping weights read of a neighbour (shading normal and view depth) is one
+//! texel of the G-buffer, `gbuffer.normal` (common/svgf.glsl, the guide texel).
 
 pub mod atrous;
-pub mod guide;
 pub mod temporal;
 
 use super::PassBuilder;

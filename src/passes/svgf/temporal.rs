@@ -7,7 +7,7 @@
 //! narrow lobe's history is reprojected from the reflected object's virtual position. Any other
 //! signal on its own, `svgf_temporal_<signal>` (svgf_temporal.comp).
 
-use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, guide, signal};
+use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, signal};
 use crate::gpu::vk;
 use crate::graph::{self, Instance, Output, OutputDesc, Preview, Resource};
 use crate::passes::PassBuilder;
@@ -68,7 +68,7 @@ impl Signal {
     }
 }
 
-/// The G-buffer and guide inputs every variant reads first (common/svgf_temporal.glsl's
+/// The G-buffer inputs every variant reads first (common/svgf_temporal.glsl's
 /// bindings 0-7).
 fn geometry() -> Vec<Input> {
     vec![
@@ -79,7 +79,7 @@ fn geometry() -> Vec<Input> {
         Input::texel(history::of(gbuffer::DEPTH)),
         Input::texel(history::of(gbuffer::NORMAL_GEO)),
         Input::texel(history::of(gbuffer::IDS)),
-        Input::texel(guide::GUIDE),
+        Input::texel(gbuffer::NORMAL),
     ]
 }
 
