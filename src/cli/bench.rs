@@ -165,6 +165,10 @@ struct SweepArgs {
     /// Render the reference again even when it is cached (and replace the cached one).
     #[arg(long)]
     fresh_reference: bool,
+    /// Seed of the configurations' random streams (the reference's are fixed): one seed's
+    /// error moves with any change to what a ray is drawn from, so compare builds over several.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
     /// No default light: scenes without punctual lights or significant emitters stay black but
     /// for their emission (by default a daylight sky lights them, reference and frames alike).
     #[arg(long)]
@@ -247,6 +251,7 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
                 camera: a.camera.clone().unwrap_or_default(),
                 cache_dir: a.cache_dir.clone(),
                 fresh_reference: a.fresh_reference,
+                seed: a.seed,
                 environment: if a.no_default_light {
                     crate::render::Environment::Constant(glam::Vec3::ZERO)
                 } else {

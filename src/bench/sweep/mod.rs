@@ -75,6 +75,10 @@ pub struct Options {
     pub environment: Environment,
     /// Render the reference again even when a cached one exists (and replace it).
     pub fresh_reference: bool,
+    /// The configurations' random streams (`Settings::seed`; the reference's and the path
+    /// tracer's are fixed). One seed's error moves with any change to the bits a ray is drawn
+    /// from; sweeps with several tell a change from that noise.
+    pub seed: u32,
 }
 
 /// Seeds of the reference's two halves (and nothing else uses them).
@@ -197,6 +201,10 @@ pub struct SceneSweep {
     /// Timing rounds (see `Options::rounds`; 0 in sweeps cached before rounds existed).
     #[serde(default)]
     pub rounds: u32,
+    /// The configurations' seed (`Options::seed`; 0 in sweeps cached before it was an option,
+    /// which used 0).
+    #[serde(default)]
+    pub seed: u32,
     pub reference: ReferenceInfo,
     pub points: Vec<Point>,
     /// The path tracer at 1, 2, 4, ... spp, on the same device, size and reference (empty in
@@ -390,6 +398,7 @@ fn run_config(
         height: opts.height,
         frame_dt: 0.0,
         environment: opts.environment.clone(),
+        seed: opts.seed,
         ..Default::default()
     };
     config.apply(&mut settings);
@@ -531,6 +540,7 @@ pub fn sweep_scene(
         frames: opts.frames,
         timed_frames: opts.timed_frames,
         rounds,
+        seed: opts.seed,
         reference: reference_info,
         pareto_front: front.iter().map(|&i| points[i].name.clone()).collect(),
         points,
@@ -603,6 +613,7 @@ pub(crate) mod testing {
             frames: 48,
             timed_frames: 8,
             rounds: 1,
+            seed: 0,
             reference: ReferenceInfo { path: "r.exr".into(), cached: false, seconds: 1.0, made },
             pareto_front: points.iter().filter(|p| p.pareto).map(|p| p.name.clone()).collect(),
             points,

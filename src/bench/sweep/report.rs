@@ -44,12 +44,13 @@ fn reference_noise_note(s: &SceneSweep) -> Option<String> {
 /// A table of a sweep's points for the terminal; `*` marks the Pareto front.
 pub fn table(s: &SceneSweep) -> String {
     let mut t = format!(
-        "{} ({}x{}, {} backend, {} frames, {} timing round(s), reference {} spp{}; reference noise FLIP {:.4})\n",
+        "{} ({}x{}, {} backend, {} frames, seed {}, {} timing round(s), reference {} spp{}; reference noise FLIP {:.4})\n",
         s.scene_name,
         s.width,
         s.height,
         s.backend,
         s.frames,
+        s.seed,
         s.rounds.max(1),
         s.reference.made.spp,
         match (s.reference.cached, s.reference.made.device != s.device) {
