@@ -11,7 +11,8 @@ pub const NAME: &str = "gbuffer";
 pub const DEPTH: Output = Output::new(NAME, "depth");
 /// The face normal (reprojection asks whether a sample is the same surface).
 pub const NORMAL_GEO: Output = Output::new(NAME, "normal_geo");
-/// The shading normal (normal-mapped).
+/// The shading normal (normal-mapped), and the view depth in alpha (0: no surface): the SVGF
+/// passes weigh each tap by both, loaded as one texel (common/svgf.glsl, the guide texel).
 pub const NORMAL: Output = Output::new(NAME, "normal");
 pub const BASE_COLOR: Output = Output::new(NAME, "base_color");
 /// Metallic, roughness, occlusion and transmission (KHR_materials_transmission).
