@@ -5,7 +5,7 @@
 // vectors with bilinear taps that each pass the validity test (on screen, same instance,
 // depth, geometric normal); the new frame is blended in with max(alpha, 1/history). The input
 // is cleaned first: NaN/Inf samples are dropped (and counted) and luminance outliers clamped to
-// mean + k sigma of their 7x7 neighbourhood (5x5 once the history is established), so neither
+// mean + k sigma of their 7x7 neighbourhood (3x3 once the history is established), so neither
 // poisons the history; what the clamp takes out is handed to the neighbours on the pixel's
 // surface (out_*clamped, which the first a-trous iteration adds), so no light is lost.
 //
@@ -154,12 +154,14 @@ bool load_finite(int s, ivec2 q, out vec3 c) {
 // The workgroup's windows, loaded once into shared memory: the 8x8 pixels' 7x7 windows cover a
 // 14x14 tile, whose guide texels, finite input samples and their luminances the workgroup loads
 // together (about 3 image loads a pixel for both signals) before any pixel walks its window
-// from the tile, where each tap had loaded its own texels (72 loads a pixel for the 5x5
+// from the tile, where each tap had loaded its own texels (72 loads a pixel for a 5x5
 // window). On lavapipe at 640x360 the pass went from 62-69 to 56-60 ms in one pair of runs,
 // 48 to 45-46 in a later one; the tile alone, with the luminance computed per tap, saved
-// nothing: the walk is bound by its arithmetic as much as by its loads. Texels past the
-// image's edge hold the edge's (the clamp's walk wants that; the young history's walk skips
-// them).
+// nothing: the walk is bound by its arithmetic as much as by its loads. Loading only the
+// 10x10 part that 3x3 windows cover where no pixel of the workgroup has a young history
+// (decided after the reprojection, between two more barriers) made the pass 2-5 ms slower.
+// Texels past the image's edge hold the edge's (the clamp's walk wants that; the young
+// history's walk skips them).
 #define WINDOW_RADIUS 3
 #define TILE_SIDE (8 + 2 * WINDOW_RADIUS)
 shared vec4 tile_guide[TILE_SIDE * TILE_SIDE];
@@ -203,14 +205,34 @@ struct Neighbourhood {
 //
 // The clamp keeps the firefly's energy (the give-back, below). With an established history
 // its bound leaves the window's brightest sample out, so that a bright sample's neighbours do
-// not judge it by a window that holds it. Its window is then 5x5: a smaller window clamps
-// more, which cost light while the clamp dropped what it took, and now only saves time.
+// not judge it by a window that holds it. Its window is then 3x3: a smaller window clamps
+// more, which cost light while the clamp dropped what it took, and now only saves time (7x7
+// until 2026-12-04, 5x5 until 2026-12-05; the 3x3 window took the pass from about 51 to 46 ms
+// at 640x360 on lavapipe at the same error in `bench sweep`: README, "The outlier window 3x3").
 // An established history's bound is this many times wider: it averages what gets past, and
 // one window of one frame's samples is a poor judge of rare bright paths. Measured at 256x256
 // on the diffuse box, the frame after 64 frames held 0.956 of the reference's light with the
 // bound at 4 sigma, 0.974 at 8 and 0.981 at 12 (gi at full rate: 0.857 and 0.891 at 4 and 8);
 // at 16 it held 0.979, the give-back then having less to spread.
 #define SVGF_ESTABLISHED_SIGMA_SCALE 3.0
+
+// Adds tap d of the outlier windows to the sums of each signal whose window holds it (a young
+// history's 7x7, an established one's 3x3), if it is on a surface.
+void clamp_tap(ivec2 d, bool young[SIGNALS], inout float sum[SIGNALS], inout float sum2[SIGNALS],
+               inout float n[SIGNALS], inout float brightest[SIGNALS]) {
+    int t = tile_index(d);
+    if (!svgf_guide_surface(tile_guide[t])) return;
+    bool inner = max(abs(d.x), abs(d.y)) <= 1;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
+        if (young[s] || inner) {
+            float l = tile_luminance[s][t];
+            sum[s] += l;
+            sum2[s] += l * l;
+            n[s] += 1.0;
+            brightest[s] = max(brightest[s], l);
+        }
+    }
+}
 
 // The window is walked once for all signals: each tap's guide texel is loaded once. `young[s]`:
 // signal s's history is younger than SVGF_MOMENTS_FRAMES (7x7 window, spatial variance);
@@ -227,25 +249,19 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
     }
     float sum[SIGNALS], sum2[SIGNALS], n[SIGNALS], brightest[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) sum[s] = sum2[s] = n[s] = brightest[s] = 0.0;
-    // A young history's window is 7x7 (its spatial variance needs it), an established one's 5x5.
-    int radius = any_young ? 3 : 2;
-    for (int dy = -radius; dy <= radius && clamped; ++dy) {
-        for (int dx = -radius; dx <= radius; ++dx) {
-            // The centre is left out, so a lone firefly cannot widen its own bound.
-            if (dx == 0 && dy == 0) continue;
-            int t = tile_index(ivec2(dx, dy));
-            vec4 gq = tile_guide[t];
-            if (!svgf_guide_surface(gq)) continue;
-            bool inner = max(abs(dx), abs(dy)) <= 2;
-            [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-                if (young[s] || inner) {
-                    float l = tile_luminance[s][t];
-                    sum[s] += l;
-                    sum2[s] += l * l;
-                    n[s] += 1.0;
-                    brightest[s] = max(brightest[s], l);
-                }
+    // A young history's window is 7x7 (its spatial variance needs it), an established one's 3x3,
+    // whose taps are unrolled (constant tile offsets).
+    if (clamped && any_young) {
+        for (int dy = -3; dy <= 3; ++dy) {
+            for (int dx = -3; dx <= 3; ++dx) {
+                // The centre is left out, so a lone firefly cannot widen its own bound.
+                if (dx != 0 || dy != 0) clamp_tap(ivec2(dx, dy), young, sum, sum2, n, brightest);
             }
+        }
+    } else if (clamped) {
+        [[unroll]] for (int i = 0; i < 8; ++i) {
+            int j = i < 4 ? i : i + 1;  // the centre, 4, is left out
+            clamp_tap(ivec2(j % 3, j / 3) - 1, young, sum, sum2, n, brightest);
         }
     }
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
@@ -313,13 +329,14 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
 // 2026-12-04 each pixel took back a share of the clamped light of the brightest neighbour on
 // its surface, estimated against its own bound: where many pixels pass their bounds (gi at
 // full rate: 6% of the pixels holding a quarter of the light) that returned about half.
-// Spread over 3x3 rather than the 5x5 window, because the a-trous iteration's step-1 taps are
-// those 8 neighbours, already loaded. Only a pixel that gives shares writes them, and says so by
-// the sign of its colour's alpha (svgf_flag), which the a-trous taps load anyway: stored for
-// every pixel and loaded by every tap, the shares made the temporal pass 3-6 ms and the first
-// a-trous iteration 2.5 ms slower at 640x360 on lavapipe. main() computes the clamp and the
-// excess without branches and gives in one branch after both signals: with a branch per
-// signal around the clamp the pass was still about 3 ms slower than without the give-back.
+// Spread over the 8 neighbours, not a young history's 7x7 window, because the a-trous
+// iteration's step-1 taps are those 8, already loaded. Only a pixel that gives shares writes
+// them, and says so by the sign of its colour's alpha (svgf_flag), which the a-trous taps load
+// anyway: stored for every pixel and loaded by every tap, the shares made the temporal pass
+// 3-6 ms and the first a-trous iteration 2.5 ms slower at 640x360 on lavapipe. main() computes
+// the clamp and the excess without branches and gives in one branch after both signals: with
+// a branch per signal around the clamp the pass was still about 3 ms slower than without the
+// give-back.
 // Until 2026-12-05 only an established history gave: a young one (a disocclusion, a restart,
 // and always a mirror's, capped at GLOSSY_HISTORY_CAP frames) dropped what its clamp took.
 // Giving there too took the Mitsuba glossy box from 0.975 to 0.984 of Mitsuba's light,

@@ -57,7 +57,8 @@ pub struct SvgfSettings {
     /// Longest history in frames.
     pub history_cap: f32,
     /// Outliers: input luminance is clamped to mean + this many standard deviations of its
-    /// 7x7 neighbourhood (the centre excluded) before anything accumulates it.
+    /// 7x7 neighbourhood (the centre excluded) before anything accumulates it; where the
+    /// history is established, of its 3x3 neighbourhood, the brightest left out, and 3x wider.
     pub clamp_sigma: f32,
     /// Converged: a-trous iterations after the first leave a signal's pixel as it is where the
     /// estimated noise of its accumulated value, sqrt(variance / history length), is below
