@@ -107,8 +107,8 @@ void update(uint slot) {
     // empty (nobody uses an empty cell), then, unless a query revived it meanwhile, its slot is
     // freed: back to all zeros, the state a new cell starts in.
     if (cell.point.w <= 0.0) {
-        rc_cells[slot] = RcCell(vec4[2](vec4(0.0), vec4(0.0)), vec4(0.0), vec4(0.0), vec4(0.0), uvec4(0u), vec4(0.0),
-                                vec4(0.0), uvec4(0u), uvec4(0u));
+        rc_cells[slot] = RcCell(vec4[2](vec4(0.0), vec4(0.0)), vec4(0.0), vec4(0.0), vec4(0.0), uvec2(0u), 0u, vec4(0.0),
+                                vec4(0.0), uvec4(0u));
         rc_keys[slot] = RC_EMPTY;
         return;
     }
@@ -146,7 +146,7 @@ void update(uint slot) {
         atomicAdd(rc.updated[f % 3u], 1u);
         if (!relit && changed(cell, read, luminance(mean.rgb))) {
             atomicAdd(rc.restarted[f % 3u], 1u);
-            rc_cells[slot].restart.x = f + 1u;
+            rc_cells[slot].restart = f + 1u;
             mean = vec4(0.0);
         }
         bool sampled = false;
@@ -188,7 +188,7 @@ bool restarted_near(vec3 p, vec3 n) {
     bool any_restarted = false;
     [[unroll]] for (int i = 0; i < 4; ++i) {
         uint slot = rc_find_key(rc_cell_key(rc_lattice_cell(lattice, i), lattice.cell, lattice.bucket), false);
-        any_restarted = any_restarted || slot != RC_NONE && rc_cells[slot].restart.x == frame.frame_index + 1u;
+        any_restarted = any_restarted || slot != RC_NONE && rc_cells[slot].restart == frame.frame_index + 1u;
     }
     return any_restarted;
 }
@@ -202,7 +202,9 @@ void view(ivec2 px) {
     vec3 p = world_position(px, imageLoad(g_depth, px).r);
     uint slot = rc_find(p, imageLoad(g_normal_geo, px).xyz, false);
     imageStore(out_irradiance, px, slot == RC_NONE ? vec4(0.0) : rc_cells[slot].radiance[rc_copy_written(frame.frame_index)]);
-    imageStore(out_changed, px, vec4(restarted_near(p, imageLoad(g_normal_geo, px).xyz) ? 1.0 : 0.0));
+    // No cell restarted this frame (a still scene, always): none to look for around p.
+    bool any_restarted = rc.restarted[frame.frame_index % 3u] != 0u;
+    imageStore(out_changed, px, vec4(any_restarted && restarted_near(p, imageLoad(g_normal_geo, px).xyz) ? 1.0 : 0.0));
 }
 
 void main() {

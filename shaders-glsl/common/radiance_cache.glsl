@@ -68,7 +68,8 @@ struct RcCell {
     vec4 point;        // xyz: where the update traces from, w: frames left to live
     vec4 normal;       // xyz: geometric normal there, w: 1 once adopted
     vec4 bounds;       // xyz: the cell's lowest corner, w: its size (for decoding proposals)
-    uvec4 proposal;    // x: ~(rank << 24 | position), y: ~(rank << 24 | normal); 0: none
+    uvec2 proposal;    // x: ~(rank << 24 | position), y: ~(rank << 24 | normal); 0: none
+    uint restart;      // frame + 1 of the mean's last restart on a change (0: none)
     // What the update's last sample saw at its path's first vertex (RcFirstVertex), so that the
     // next update can tell whether it changed (radiance_cache.comp, `changed`):
     vec4 shadow_from;  // xyz: the light sample's shadow-ray origin, w: its length (0: none)
@@ -76,7 +77,6 @@ struct RcCell {
     uvec4 record;      // x: frame + 1 of the sample (0: none), y: slot + 1 of the cell that answered
                        // there (0: none), z: half2(that cell's luminance, its weighted share),
                        // w: that cell's samples then
-    uvec4 restart;     // x: frame + 1 of the mean's last restart on a change (0: none)
 };
 
 // Written by the CPU when the cache is made (params), then counters of the update pass.

@@ -24,13 +24,14 @@ pub const CHANGED: Output = Output::new(NAME, "changed");
 /// The GLSL names of the cache's buffer blocks (common/radiance_cache.glsl), in binding order.
 pub const BUFFER_BLOCKS: [&str; 3] = ["RcKeys", "RcCells", "RcStateBuffer"];
 
-/// Slots of the hash table: a power of two. 128 Ki cells of 160 bytes (20 MiB).
+/// Slots of the hash table: a power of two. 128 Ki cells of 144 bytes (18 MiB).
 pub const CAPACITY: u32 = 1 << 17;
 /// The running mean's window: the cache follows a change of the light within about this many
 /// updates of a cell.
 pub const MAX_SAMPLES: u32 = 16;
-/// Size of `RcCell` in common/radiance_cache.glsl (std430: seven vec4 and three uvec4).
-const CELL_BYTES: u64 = 160;
+/// Size of `RcCell` in common/radiance_cache.glsl (std430: seven vec4, a uvec4, and a uvec2
+/// and a uint padded to 16 bytes).
+const CELL_BYTES: u64 = 144;
 /// Invocations per workgroup of the update (`local_size_x * local_size_y`).
 const UPDATE_GROUP: u32 = 64;
 
