@@ -474,7 +474,10 @@ void main() {
         bool gone = (s == 0 && diffuse_changed) || lost_share_of(lost[s], luminance(hist_c[s]));
         blur[s] = wsum <= 1e-3 || gone;  // nothing reprojects, or nothing holds
         len[s] = blur[s] ? 1.0 : min(hist_len / wsum + 1.0, cap[s]);
-        young[s] = len[s] < SVGF_MOMENTS_FRAMES;
+        // A signal the a-trous iterations leave as it is (a mirror's, footprint 0) is never
+        // young: its spatial variance and its window's mean would go unused, and a mirror's
+        // history, capped at GLOSSY_HISTORY_CAP frames, would walk the 7x7 window every frame.
+        young[s] = len[s] < SVGF_MOMENTS_FRAMES && footprint[s] > 0.0;
     }
     Neighbourhood nb[SIGNALS];
     neighbourhood(px, tile_guide[tile_index(ivec2(0))], id, fw, c, young, blur, nb);
