@@ -213,12 +213,12 @@ fn history_restarts_on_disocclusion_and_camera_cut() {
     }
     let before = r.read_output(passes::gbuffer::IDS).unwrap();
     r.render_frame().unwrap();
-    let imgs = r.read_outputs(&[passes::gbuffer::IDS, temporal(svgf::temporal::HISTORY_LENGTH)]).unwrap();
+    let imgs = r.read_outputs(&[passes::gbuffer::IDS, temporal(svgf::temporal::CENTRE)]).unwrap();
     let (mut uncovered, mut steady) = (0, 0);
     for y in 0..H {
         for x in 0..W {
             let (was, is) = (before.get_u32(x, y, 0), imgs[0].get_u32(x, y, 0));
-            let len = imgs[1].get(x, y, 0);
+            let len = imgs[1].get(x, y, svgf::temporal::LENGTH_CHANNEL);
             if was == facts::CUBE_INSTANCE && is == facts::PLANE_INSTANCE {
                 uncovered += 1;
                 assert_eq!(len, 1.0, "pixel ({x},{y}) uncovered by the moving cube keeps a history of {len}");
@@ -231,8 +231,8 @@ fn history_restarts_on_disocclusion_and_camera_cut() {
     assert!(uncovered > 0 && steady > 500, "uncovered {uncovered}, steady {steady}");
     r.camera_cut();
     r.render_frame().unwrap();
-    let len = r.read_output(temporal(svgf::temporal::HISTORY_LENGTH)).unwrap();
-    let longest = (0..W * H).map(|i| len.get(i % W, i / W, 0)).fold(0.0f32, f32::max);
+    let len = r.read_output(temporal(svgf::temporal::CENTRE)).unwrap();
+    let longest = (0..W * H).map(|i| len.get(i % W, i / W, svgf::temporal::LENGTH_CHANNEL)).fold(0.0f32, f32::max);
     assert_eq!(longest, 1.0, "after a camera cut every history restarts");
     drop(r);
     common::assert_validation_clean(ctx);

@@ -34,24 +34,16 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define SIGNALS 2
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_diffuse;
 layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_specular;
-layout(set = 1, binding = 2, r32f) uniform readonly image2D in_diffuse_history_length;
-layout(set = 1, binding = 3, r32f) uniform readonly image2D in_specular_history_length;
-layout(set = 1, binding = 4, rgba32f) uniform readonly image2D g_normal;  // shading normal, view depth (0: no surface)
-layout(set = 1, binding = 5, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
-layout(set = 1, binding = 6, rgba8) uniform readonly image2D g_metal_rough;
-// reflections.hit_distance (a zero image without SVGF_SHARP_SPECULAR): svgf_lobe_roughness.
-layout(set = 1, binding = 7, r32f) uniform readonly image2D in_hit_distance;
+// svgf_temporal.centre: the depth's fwidth, the specular footprint, the history lengths (svgf_centre).
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D in_centre;
+layout(set = 1, binding = 3, rgba32f) uniform readonly image2D g_normal;  // shading normal, view depth (0: no surface)
 // svgf_temporal's give-back (read at step 1 only, where flagged; a 1x1 zero image after).
-layout(set = 1, binding = 8, rgba16f) uniform readonly image2D in_diffuse_clamped;
-layout(set = 1, binding = 9, rgba16f) uniform readonly image2D in_specular_clamped;
-layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 11, rgba16f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 4, rgba16f) uniform readonly image2D in_diffuse_clamped;
+layout(set = 1, binding = 5, rgba16f) uniform readonly image2D in_specular_clamped;
+layout(set = 1, binding = 6, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 7, rgba16f) uniform writeonly image2D out_specular;
 
 vec4 load_texel(int s, ivec2 q) { return s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q); }
-
-float load_history_length(int s, ivec2 q) {
-    return (s == 0 ? imageLoad(in_diffuse_history_length, q) : imageLoad(in_specular_history_length, q)).r;
-}
 
 vec3 load_clamped(int s, ivec2 q) {
     return (s == 0 ? imageLoad(in_diffuse_clamped, q) : imageLoad(in_specular_clamped, q)).rgb;
@@ -64,15 +56,14 @@ void store_texel(int s, ivec2 q, vec4 texel) {
 #else
 #define SIGNALS 1
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_color;
-layout(set = 1, binding = 1, r32f) uniform readonly image2D in_history_length;
+// svgf_temporal.centre: the depth's fwidth, the history length in z (svgf_centre).
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_centre;
 layout(set = 1, binding = 2, rgba32f) uniform readonly image2D g_normal;  // shading normal, view depth (0: no surface)
-layout(set = 1, binding = 3, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
 // svgf_temporal's give-back (read at step 1 only, where flagged; a 1x1 zero image after).
-layout(set = 1, binding = 4, rgba16f) uniform readonly image2D in_clamped;
-layout(set = 1, binding = 5, rgba16f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D in_clamped;
+layout(set = 1, binding = 4, rgba16f) uniform writeonly image2D out_color;
 
 vec4 load_texel(int s, ivec2 q) { return imageLoad(in_color, q); }
-float load_history_length(int s, ivec2 q) { return imageLoad(in_history_length, q).r; }
 vec3 load_clamped(int s, ivec2 q) { return imageLoad(in_clamped, q).rgb; }
 
 void store_texel(int s, ivec2 q, vec4 texel) { imageStore(out_color, q, texel); }
@@ -104,14 +95,9 @@ void main() {
         [[unroll]] for (int s = 0; s < SIGNALS; ++s) store_texel(s, px, texel_p[s]);
         return;
     }
+    vec4 centre = imageLoad(in_centre, px);
     float footprint[SIGNALS];
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) footprint[s] = 1.0;
-#ifdef SVGF_PAIR
-    if ((svgf.flags & SVGF_SHARP_SPECULAR) != 0u) {
-        float hit = imageLoad(in_hit_distance, px).r;
-        footprint[1] = svgf_footprint(svgf_lobe_roughness(imageLoad(g_metal_rough, px).y, hit));
-    }
-#endif
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) footprint[s] = s == 1 ? centre.y : 1.0;
     // Iterations after the first (which feeds the history) leave converged signals as they are
     // (flagged by the iteration before): no footprint keeps the centre alone. Without any
     // signal left to filter, no taps at all.
@@ -129,7 +115,7 @@ void main() {
     // needs the variance. (No `continue` in this loop: with one, the iteration cost
     // twice as much on lavapipe, most likely because the taps then stayed in memory rather
     // than in registers; not confirmed in its compiled code.)
-    float z_scale = svgf.sigma_z * imageLoad(g_depth, px).g * float(svgf.step);
+    float z_scale = svgf.sigma_z * centre.x * float(svgf.step);
     float e_geometry[TAPS];
     vec4 c_q[TAPS][SIGNALS];
     float var_sum[SIGNALS], var_wsum = 1.0;  // the prefilter at step 1
@@ -193,7 +179,7 @@ void main() {
             sum += vec4(w * c_q[i][s].rgb, w * w * c_q[i][s].a);
             wsum += w;
         }
-        store_signal(s, px, vec4(sum.rgb / wsum + given[s], sum.a / (wsum * wsum)), load_history_length(s, px));
+        store_signal(s, px, vec4(sum.rgb / wsum + given[s], sum.a / (wsum * wsum)), centre[2 + s]);
     }
 }
 

@@ -68,47 +68,39 @@ layout(set = 1, binding = 10, rgba16f) uniform readonly image2D prev_diffuse;
 layout(set = 1, binding = 11, rgba16f) uniform readonly image2D prev_specular;
 layout(set = 1, binding = 12, rg32f) uniform readonly image2D prev_diffuse_moments;
 layout(set = 1, binding = 13, rg32f) uniform readonly image2D prev_specular_moments;
-layout(set = 1, binding = 14, r32f) uniform readonly image2D prev_diffuse_history_length;
-layout(set = 1, binding = 15, r32f) uniform readonly image2D prev_specular_history_length;
+layout(set = 1, binding = 14, rgba16f) uniform readonly image2D prev_centre;  // svgf_centre: lengths in z, w
 // reflections.hit_distance: mean distance to what the reflection rays hit, negated for what the
 // surface lets through (0: none traced; a zero image without SVGF_SHARP_SPECULAR).
-layout(set = 1, binding = 16, r32f) uniform readonly image2D in_hit_distance;
-layout(set = 1, binding = 17, rgba8) uniform readonly image2D g_metal_rough;
+layout(set = 1, binding = 15, r32f) uniform readonly image2D in_hit_distance;
+layout(set = 1, binding = 16, rgba8) uniform readonly image2D g_metal_rough;
 // radiance_cache.changed: 1 where a radiance cache cell around the surface restarted this
 // frame on a change of its light that the frame did not announce (an occluder); a zero image
 // without a cache.
-layout(set = 1, binding = 18, r32f) uniform readonly image2D in_cache_changed;
+layout(set = 1, binding = 17, r32f) uniform readonly image2D in_cache_changed;
 // gi.light_lost: what a pixel's resampled light brought to each signal last frame where it is
 // now in shadow, x diffuse, y specular (an occluder the frame was not told of); a zero image
 // without resampled lights.
-layout(set = 1, binding = 19, rg32f) uniform readonly image2D in_light_lost;
-layout(set = 1, binding = 20, rgba16f) uniform writeonly image2D out_diffuse;
-layout(set = 1, binding = 21, rgba16f) uniform writeonly image2D out_specular;
-layout(set = 1, binding = 22, rg32f) uniform writeonly image2D out_diffuse_moments;
-layout(set = 1, binding = 23, rg32f) uniform writeonly image2D out_specular_moments;
-layout(set = 1, binding = 24, r32f) uniform writeonly image2D out_diffuse_history_length;
-layout(set = 1, binding = 25, r32f) uniform writeonly image2D out_specular_history_length;
-layout(set = 1, binding = 26, rgba16f) uniform writeonly image2D out_diffuse_clamped;
-layout(set = 1, binding = 27, rgba16f) uniform writeonly image2D out_specular_clamped;
-#define SVGF_OUT_REJECTED 28
+layout(set = 1, binding = 18, rg32f) uniform readonly image2D in_light_lost;
+layout(set = 1, binding = 19, rgba16f) uniform writeonly image2D out_diffuse;
+layout(set = 1, binding = 20, rgba16f) uniform writeonly image2D out_specular;
+layout(set = 1, binding = 21, rg32f) uniform writeonly image2D out_diffuse_moments;
+layout(set = 1, binding = 22, rg32f) uniform writeonly image2D out_specular_moments;
+layout(set = 1, binding = 23, rgba16f) uniform writeonly image2D out_diffuse_clamped;
+layout(set = 1, binding = 24, rgba16f) uniform writeonly image2D out_specular_clamped;
+#define SVGF_OUT_REJECTED 25
 
 vec3 load_input(int s, ivec2 q) { return (s == 0 ? imageLoad(in_diffuse, q) : imageLoad(in_specular, q)).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return (s == 0 ? imageLoad(prev_diffuse, q) : imageLoad(prev_specular, q)).rgb; }
 vec2 load_prev_moments(int s, ivec2 q) {
     return (s == 0 ? imageLoad(prev_diffuse_moments, q) : imageLoad(prev_specular_moments, q)).xy;
 }
-float load_prev_history_length(int s, ivec2 q) {
-    return (s == 0 ? imageLoad(prev_diffuse_history_length, q) : imageLoad(prev_specular_history_length, q)).r;
-}
-void store(int s, ivec2 q, vec4 color, vec2 moments, float len) {
+void store(int s, ivec2 q, vec4 color, vec2 moments) {
     if (s == 0) {
         imageStore(out_diffuse, q, color);
         imageStore(out_diffuse_moments, q, vec4(moments, 0.0, 0.0));
-        imageStore(out_diffuse_history_length, q, vec4(len));
     } else {
         imageStore(out_specular, q, color);
         imageStore(out_specular_moments, q, vec4(moments, 0.0, 0.0));
-        imageStore(out_specular_history_length, q, vec4(len));
     }
 }
 void store_clamped(int s, ivec2 q, vec3 share) {
@@ -120,26 +112,27 @@ void store_clamped(int s, ivec2 q, vec3 share) {
 layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_signal;
 layout(set = 1, binding = 9, rgba16f) uniform readonly image2D prev_color;
 layout(set = 1, binding = 10, rg32f) uniform readonly image2D prev_moments;
-layout(set = 1, binding = 11, r32f) uniform readonly image2D prev_history_length;
+layout(set = 1, binding = 11, rgba16f) uniform readonly image2D prev_centre;  // svgf_centre: the length in z
 layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_color;
 layout(set = 1, binding = 13, rg32f) uniform writeonly image2D out_moments;
-layout(set = 1, binding = 14, r32f) uniform writeonly image2D out_history_length;
-layout(set = 1, binding = 15, rgba16f) uniform writeonly image2D out_clamped;
-#define SVGF_OUT_REJECTED 16
+layout(set = 1, binding = 14, rgba16f) uniform writeonly image2D out_clamped;
+#define SVGF_OUT_REJECTED 15
 
 vec3 load_input(int s, ivec2 q) { return imageLoad(in_signal, q).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return imageLoad(prev_color, q).rgb; }
 vec2 load_prev_moments(int s, ivec2 q) { return imageLoad(prev_moments, q).xy; }
-float load_prev_history_length(int s, ivec2 q) { return imageLoad(prev_history_length, q).r; }
-void store(int s, ivec2 q, vec4 color, vec2 moments, float len) {
+void store(int s, ivec2 q, vec4 color, vec2 moments) {
     imageStore(out_color, q, color);
     imageStore(out_moments, q, vec4(moments, 0.0, 0.0));
-    imageStore(out_history_length, q, vec4(len));
 }
 void store_clamped(int s, ivec2 q, vec3 share) { imageStore(out_clamped, q, vec4(share, 0.0)); }
 #endif
 // x: input samples that were NaN or Inf, counted since the first frame (only pixel 0,0).
 layout(set = 1, binding = SVGF_OUT_REJECTED, r32ui) uniform uimage2D out_rejected;
+// What each a-trous iteration reads of the pixel it filters besides its guide texel (svgf_centre
+// in common/svgf.glsl): the view depth's fwidth, the specular footprint, the history lengths,
+// which the next frame reprojects (prev_centre).
+layout(set = 1, binding = SVGF_OUT_REJECTED + 1, rgba16f) uniform writeonly image2D out_centre;
 
 #include "common/svgf.glsl"
 
@@ -388,7 +381,8 @@ void main() {
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
     uint id = imageLoad(g_ids, px).x;
     if (id == NO_INSTANCE) {
-        [[unroll]] for (int s = 0; s < SIGNALS; ++s) store(s, px, vec4(0.0), vec2(0.0), 0.0);
+        [[unroll]] for (int s = 0; s < SIGNALS; ++s) store(s, px, vec4(0.0), vec2(0.0));
+        imageStore(out_centre, px, vec4(0.0));
         return;
     }
     vec3 c[SIGNALS];
@@ -463,7 +457,7 @@ void main() {
                 ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
                 hist_c[s] += tap_w[s][i] * load_prev_color(s, q);
                 hist_m[s] += tap_w[s][i] * load_prev_moments(s, q);
-                hist_len += tap_w[s][i] * load_prev_history_length(s, q);
+                hist_len += tap_w[s][i] * imageLoad(prev_centre, q)[2 + s];
             }
         }
         float wsum = dot(tap_w[s], vec4(1.0));
@@ -520,7 +514,8 @@ void main() {
             }
         }
     }
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) store(s, px, texel[s], moments[s], len[s]);
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) store(s, px, texel[s], moments[s]);
+    imageStore(out_centre, px, svgf_centre(fw, footprint[SIGNALS - 1], len[0], len[SIGNALS - 1]));
 }
 
 #endif

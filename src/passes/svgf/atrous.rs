@@ -4,13 +4,11 @@
 //! each tap's guide texel and depth and normal weights; any other signal on its own,
 //! `svgf_atrous_<signal>_<i>` (svgf_atrous.comp).
 
-use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, iteration, temporal};
-use crate::gpu::vk;
+use super::{COLOR_FORMAT, PAIR, SvgfSettings, iteration, temporal};
 use crate::graph::{self, Output, OutputDesc, Preview};
 use crate::passes::PassBuilder;
 use crate::passes::fullscreen::{FullscreenPass, Input};
 use crate::passes::gbuffer;
-use crate::passes::reflections;
 use anyhow::Result;
 
 pub const NAME: &str = "svgf_atrous";
@@ -29,9 +27,8 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
     let run = iteration(signal, i);
     let inputs = vec![
         Input::texel(color),
-        Input::texel(temporal::HISTORY_LENGTH.of(super::signal(signal))),
+        Input::texel(temporal::CENTRE.of(super::signal(signal))),
         Input::texel(gbuffer::NORMAL),
-        Input::texel(gbuffer::DEPTH),
         give_back(temporal::CLAMPED.of(super::signal(signal)), i),
     ];
     let outputs = vec![OutputDesc::storage(COLOR.of(run), COLOR_FORMAT, Preview::Color)];
@@ -39,25 +36,20 @@ pub fn single(b: &PassBuilder, signal: &'static str, i: u32, s: &SvgfSettings) -
     FullscreenPass::new(b, &COLOR.of(run).pass_name(), "svgf_atrous.comp", inputs, outputs, &push)
 }
 
-/// Iteration `i` of the frame's diffuse and specular signals. `sharp_specular`: the specular
-/// signal is made of reflection rays, whose narrow lobes keep their sharpness.
-pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> Result<FullscreenPass> {
+/// Iteration `i` of the frame's diffuse and specular signals (a narrow reflection lobe's
+/// footprint, which keeps it sharp, comes with `temporal::CENTRE`).
+pub fn pair(b: &PassBuilder, i: u32, s: &SvgfSettings) -> Result<FullscreenPass> {
     let pair = super::signal(PAIR);
     let (diffuse, specular) = if i == 0 {
         (temporal::DIFFUSE.of(pair), temporal::SPECULAR.of(pair))
     } else {
         (DIFFUSE.of(iteration(PAIR, i - 1)), SPECULAR.of(iteration(PAIR, i - 1)))
     };
-    let hit = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
     let inputs = vec![
         Input::texel(diffuse).bound_as("in_diffuse"),
         Input::texel(specular).bound_as("in_specular"),
-        Input::texel(temporal::DIFFUSE_HISTORY_LENGTH.of(pair)),
-        Input::texel(temporal::SPECULAR_HISTORY_LENGTH.of(pair)),
+        Input::texel(temporal::CENTRE.of(pair)),
         Input::texel(gbuffer::NORMAL),
-        Input::texel(gbuffer::DEPTH),
-        Input::texel(gbuffer::METAL_ROUGH),
-        if sharp_specular { hit } else { hit.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },
         give_back(temporal::DIFFUSE_CLAMPED.of(pair), i),
         give_back(temporal::SPECULAR_CLAMPED.of(pair), i),
     ];
@@ -66,8 +58,7 @@ pub fn pair(b: &PassBuilder, i: u32, sharp_specular: bool, s: &SvgfSettings) -> 
         OutputDesc::storage(DIFFUSE.of(run), COLOR_FORMAT, Preview::Color),
         OutputDesc::storage(SPECULAR.of(run), COLOR_FORMAT, Preview::Color),
     ];
-    let flags = if sharp_specular { SHARP_SPECULAR } else { 0 };
-    let push = s.push_constants(1 << i, flags);
+    let push = s.push_constants(1 << i, 0);
     let shader = "svgf_atrous_diffuse_specular.comp";
     FullscreenPass::new(b, &DIFFUSE.of(run).pass_name(), shader, inputs, outputs, &push)
 }

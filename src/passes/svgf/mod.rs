@@ -152,18 +152,15 @@ pub fn pair(
     let mut passes: Vec<Box<dyn Pass>> =
         vec![Box::new(temporal::pair(b, (diffuse, specular), filtered, hit_distance, restarts, s)?)];
     for i in 0..iterations {
-        passes.push(Box::new(atrous::pair(b, i, hit_distance.is_some(), s)?));
+        passes.push(Box::new(atrous::pair(b, i, s)?));
     }
     let run = signal(PAIR);
-    let kept = [
-        [filtered[0], temporal::DIFFUSE_MOMENTS.of(run), temporal::DIFFUSE_HISTORY_LENGTH.of(run)],
-        [filtered[1], temporal::SPECULAR_MOMENTS.of(run), temporal::SPECULAR_HISTORY_LENGTH.of(run)],
-    ];
+    let kept = [[filtered[0], temporal::DIFFUSE_MOMENTS.of(run)], [filtered[1], temporal::SPECULAR_MOMENTS.of(run)]];
     let last = iteration(PAIR, iterations - 1);
     Ok(Chain {
         passes,
         outputs: vec![atrous::DIFFUSE.of(last), atrous::SPECULAR.of(last)],
-        kept: kept.into_iter().flat_map(keep).collect(),
+        kept: kept.into_iter().flat_map(keep).chain([keep_lengths(run)]).collect(),
     })
 }
 
@@ -177,12 +174,18 @@ pub fn single(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSe
     }
     let outputs = vec![atrous::COLOR.of(iteration(signal, iterations - 1))];
     let run = self::signal(signal);
-    let kept = keep([filtered, temporal::MOMENTS.of(run), temporal::HISTORY_LENGTH.of(run)]);
-    Ok(Chain { passes, outputs, kept: kept.to_vec() })
+    let kept = keep([filtered, temporal::MOMENTS.of(run)]).into_iter().chain([keep_lengths(run)]).collect();
+    Ok(Chain { passes, outputs, kept })
 }
 
-/// What the next frame's temporal stage of a signal reprojects: its first a-trous colour, its
-/// moments, its history length.
-fn keep(images: [Output; 3]) -> [Kept; 3] {
+/// What the next frame's temporal stage of a signal reprojects: its first a-trous colour and
+/// its moments (and, for all its signals, `keep_lengths`).
+fn keep(images: [Output; 2]) -> [Kept; 2] {
     std::array::from_fn(|k| Kept::new(images[k], temporal::FORMATS[k], temporal::PREVIEWS[k]))
+}
+
+/// The history lengths of the temporal stage `run`'s signals, which the next frame reprojects
+/// (`temporal::CENTRE`).
+fn keep_lengths(run: Instance) -> Kept {
+    Kept::new(temporal::CENTRE.of(run), temporal::CENTRE_FORMAT, temporal::CENTRE_PREVIEW)
 }

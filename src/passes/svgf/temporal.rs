@@ -24,8 +24,6 @@ pub const NAME: &str = "svgf_temporal";
 pub const COLOR: Output = Output::new(NAME, "color");
 /// A lone signal's first and second moments of the luminance.
 pub const MOMENTS: Output = Output::new(NAME, "moments");
-/// A lone signal's frames accumulated.
-pub const HISTORY_LENGTH: Output = Output::new(NAME, "history_length");
 /// A lone signal's give-back: what the outlier clamp took out of the pixel's sample, weighed
 /// as the history would have weighed it, divided among the neighbours on its surface (each
 /// share; the first a-trous iteration adds the shares of its neighbours).
@@ -36,18 +34,27 @@ pub const DIFFUSE: Output = Output::new(NAME, "diffuse");
 pub const SPECULAR: Output = Output::new(NAME, "specular");
 pub const DIFFUSE_MOMENTS: Output = Output::new(NAME, "diffuse_moments");
 pub const SPECULAR_MOMENTS: Output = Output::new(NAME, "specular_moments");
-pub const DIFFUSE_HISTORY_LENGTH: Output = Output::new(NAME, "diffuse_history_length");
-pub const SPECULAR_HISTORY_LENGTH: Output = Output::new(NAME, "specular_history_length");
 /// The pair's give-back of each signal, as `CLAMPED`.
 pub const DIFFUSE_CLAMPED: Output = Output::new(NAME, "diffuse_clamped");
 pub const SPECULAR_CLAMPED: Output = Output::new(NAME, "specular_clamped");
 /// Non-finite input samples caught since the first frame (texel 0,0), of every signal.
 pub const REJECTED: Output = Output::new(NAME, "rejected");
+/// What each a-trous iteration reads of the pixel it filters besides its guide texel, in one
+/// half-precision texel (`svgf_centre` in common/svgf.glsl): the view depth's fwidth, the
+/// specular footprint, and each signal's frames accumulated, the history length (z diffuse, w
+/// specular; a lone signal's in z), which the next frame reprojects.
+pub const CENTRE: Output = Output::new(NAME, "centre");
+/// `CENTRE`'s channel of a lone signal's history length (the pair's diffuse; its specular's is
+/// the next).
+pub const LENGTH_CHANNEL: usize = 2;
 
-/// The formats of a signal's accumulated colour, moments and history length.
-pub const FORMATS: [vk::Format; 3] = [COLOR_FORMAT, vk::Format::R32G32_SFLOAT, vk::Format::R32_SFLOAT];
+/// The formats of a signal's accumulated colour and moments.
+pub const FORMATS: [vk::Format; 2] = [COLOR_FORMAT, vk::Format::R32G32_SFLOAT];
 /// How the dumps show them.
-pub const PREVIEWS: [Preview; 3] = [Preview::Color, Preview::Scalar, Preview::Scalar];
+pub const PREVIEWS: [Preview; 2] = [Preview::Color, Preview::Scalar];
+/// `CENTRE`'s format and preview (its history lengths are kept for the next frame too).
+pub const CENTRE_FORMAT: vk::Format = COLOR_FORMAT;
+pub const CENTRE_PREVIEW: Preview = Preview::Scalar;
 
 /// One signal's images: what it accumulates this frame and writes.
 struct Signal {
@@ -55,14 +62,14 @@ struct Signal {
     input: Input,
     /// The chain's first a-trous output, whose previous frame is the colour history.
     filtered: Output,
-    /// Colour, moments, history length.
-    outputs: [Output; 3],
+    /// Colour, moments.
+    outputs: [Output; 2],
     /// The give-back (`CLAMPED`).
     clamped: Output,
 }
 
 impl Signal {
-    /// What the previous frame left of output `k`: the filtered colour, the moments, the length.
+    /// What the previous frame left of output `k`: the filtered colour, the moments.
     fn previous(&self, k: usize) -> Output {
         if k == 0 { self.filtered } else { self.outputs[k] }
     }
@@ -83,8 +90,8 @@ fn geometry() -> Vec<Input> {
     ]
 }
 
-/// Per signal: the input, then (after all inputs) the previous colour, moments and length,
-/// then the outputs; `run` names the pass.
+/// Per signal: the input, then (after all inputs) the previous colour and moments; then the
+/// previous history lengths (`CENTRE`), then the outputs; `run` names the pass.
 fn pass(
     b: &PassBuilder,
     run: Instance,
@@ -96,9 +103,10 @@ fn pass(
 ) -> Result<FullscreenPass> {
     let mut inputs = geometry();
     inputs.extend(signals.iter().map(|x| x.input.clone()));
-    for k in 0..3 {
+    for k in 0..2 {
         inputs.extend(signals.iter().map(|x| Input::texel(history::of(x.previous(k)))));
     }
+    inputs.push(Input::texel(history::of(CENTRE.of(run))));
     inputs.extend(extra);
     let mut outputs = Vec::new();
     for (k, (format, preview)) in FORMATS.into_iter().zip(PREVIEWS).enumerate() {
@@ -106,6 +114,7 @@ fn pass(
     }
     outputs.extend(signals.iter().map(|x| OutputDesc::storage(x.clamped, COLOR_FORMAT, Preview::Color)));
     outputs.push(OutputDesc::storage(REJECTED.of(run), vk::Format::R32_UINT, Preview::Scalar).with_extent(1, 1));
+    outputs.push(OutputDesc::storage(CENTRE.of(run), CENTRE_FORMAT, CENTRE_PREVIEW));
     let push = s.push_constants(0, flags);
     FullscreenPass::new(b, &REJECTED.of(run).pass_name(), shader, inputs, outputs, &push)
 }
@@ -123,7 +132,7 @@ pub fn single(
     let one = Signal {
         input: Input::texel(input).bound_as("in_signal"),
         filtered,
-        outputs: [COLOR.of(run), MOMENTS.of(run), HISTORY_LENGTH.of(run)],
+        outputs: [COLOR.of(run), MOMENTS.of(run)],
         clamped: CLAMPED.of(run),
     };
     pass(b, run, "svgf_temporal.comp", &[one], Vec::new(), s, 0)
@@ -148,13 +157,13 @@ pub fn pair(
         Signal {
             input: Input::texel(diffuse).bound_as("in_diffuse"),
             filtered: filtered[0],
-            outputs: [DIFFUSE.of(run), DIFFUSE_MOMENTS.of(run), DIFFUSE_HISTORY_LENGTH.of(run)],
+            outputs: [DIFFUSE.of(run), DIFFUSE_MOMENTS.of(run)],
             clamped: DIFFUSE_CLAMPED.of(run),
         },
         Signal {
             input: Input::texel(specular).bound_as("in_specular"),
             filtered: filtered[1],
-            outputs: [SPECULAR.of(run), SPECULAR_MOMENTS.of(run), SPECULAR_HISTORY_LENGTH.of(run)],
+            outputs: [SPECULAR.of(run), SPECULAR_MOMENTS.of(run)],
             clamped: SPECULAR_CLAMPED.of(run),
         },
     ];
