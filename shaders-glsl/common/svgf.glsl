@@ -118,7 +118,7 @@ vec4 svgf_unpack(vec4 texel) { return vec4(texel.rgb, texel.a * texel.a); }
 // that pass no more stores. Each iteration loads this one texel where it loaded five (the
 // fwidth from the G-buffer, the roughness and hit distance that make the footprint, a length
 // per signal): at 1920x1080 on lavapipe the four iterations took about 12% less time, at
-// 640x360 about 5% (README, "One texel for the pixel's own"). Half precision, as the signals:
+// 640x360 3-6% (README, "One texel for the pixel's own"). Half precision, as the signals:
 // the depth weight's scale needs no more, and a length below 32 frames keeps 1/64 of one.
 vec4 svgf_centre(float fwidth_z, float footprint, float diffuse_length, float specular_length) {
     return svgf_nearest_half(vec4(min(fwidth_z, SVGF_HALF_MAX), footprint, diffuse_length, specular_length));
@@ -141,7 +141,6 @@ bool svgf_flagged(vec4 texel) { return texel.a < 0.0; }
 // svgf_guide, packed the two (and the ids) into a texel of its own, which cost a full-screen
 // pass a frame (README, "The guide written by the rasteriser").
 bool svgf_guide_surface(vec4 guide) { return guide.w > 0.0; }
-
 
 // Are the surface pixels with guide texels a and b on one surface, for the outlier clamp's
 // give-back (svgf_temporal, svgf_atrous): shading normals within 25 degrees, view depths within
