@@ -21,8 +21,9 @@ layout(push_constant) uniform SvgfParams {
     uint flags;           // SVGF_SHARP_SPECULAR
 } svgf;
 
-// svgf_atrous: the specular signal is made of reflection rays, and a narrow lobe's reflection
-// keeps its sharpness (svgf_footprint).
+// svgf_temporal: the specular signal is made of reflection rays: a narrow lobe's history follows
+// the reflected object, and its footprint (svgf_footprint, handed to the a-trous iterations in
+// svgf_centre) keeps its reflection sharp.
 #define SVGF_SHARP_SPECULAR 1u
 
 bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
