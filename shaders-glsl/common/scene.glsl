@@ -101,6 +101,7 @@ layout(set = 0, binding = 0, scalar) uniform FrameUniforms {
     vec3 sky_color;
     uint instance_count;
     uint flags;  // FRAME_*
+    vec2 prev_jitter;  // last frame's `jitter` (the G-buffer's texels sat at centre - jitter then)
 } frame;
 
 // Set on the first frame and after a camera cut: temporal passes start their history anew.

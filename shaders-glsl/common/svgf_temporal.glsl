@@ -444,10 +444,27 @@ void main() {
     vec3 hist_c[SIGNALS];
     vec2 hist_m[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-        // A history fetched from where the other's was shares its validity tests.
-        if (reset) tap_w[s] = vec4(0.0);
-        else if (s > 0 && prev_pos[s] == prev_pos[0] && fw_tolerance[s] == fw_tolerance[0]) tap_w[s] = tap_w[0];
-        else tap_w[s] = reprojection_weights(prev_pos[s], z, fw_tolerance[s], ng, id);
+        // A history fetched from where the other's was shares its validity tests (and the
+        // other's fallback below).
+        if (reset) {
+            tap_w[s] = vec4(0.0);
+        } else if (s > 0 && prev_pos[s] == surface_pos && fw_tolerance[s] == fw_tolerance[0]) {
+            tap_w[s] = tap_w[0];
+            prev_pos[s] = prev_pos[0];
+        } else {
+            tap_w[s] = reprojection_weights(prev_pos[s], z, fw_tolerance[s], ng, id);
+            // No tap holds this surface: look where its sample was among last frame's, whose
+            // texels sat at centre - prev_jitter (the motion vectors leave TAA's jitter out).
+            // Only then: a still camera's reprojection lands on texel centres, one tap with all
+            // the weight, and a history resampled off-centre every frame would be blurred a
+            // little more every frame. At an edge the jitter shows one surface in one frame and
+            // the other in the next, and without this each edge pixel restarted its history,
+            // and walked its young window (above), every other frame or so.
+            if (dot(tap_w[s], vec4(1.0)) <= 1e-3 && frame.prev_jitter != frame.jitter) {
+                prev_pos[s] += frame.prev_jitter - frame.jitter;
+                tap_w[s] = reprojection_weights(prev_pos[s], z, fw_tolerance[s], ng, id);
+            }
+        }
         vec2 base = floor(prev_pos[s] - 0.5);
         hist_c[s] = vec3(0.0);
         hist_m[s] = vec2(0.0);

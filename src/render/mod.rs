@@ -127,6 +127,8 @@ pub struct Renderer {
     /// Frames rendered so far; the next frame's index.
     pub frame_index: u32,
     prev_view: Option<View>,
+    /// The jitter the last frame was rasterised with (`FrameUniforms::prev_jitter`).
+    prev_jitter: [f32; 2],
     /// The centre of the scene's bounds at the start: the distance at which the camera's motion is
     /// measured for TAA's jitter (`camera::image_motion`).
     scene_centre: glam::Vec3,
@@ -252,6 +254,7 @@ impl Renderer {
             camera,
             frame_index: 0,
             prev_view: None,
+            prev_jitter: [0.0; 2],
             last_view: None,
             scene_centre,
             last_pass_times: Vec::new(),
@@ -399,6 +402,7 @@ impl Renderer {
         }
         self.cut_pending = false;
         self.prev_view = Some(view);
+        self.prev_jitter = uniforms.jitter;
         self.last_view = Some(view);
         self.frame_index += 1;
         Ok(())
@@ -437,6 +441,7 @@ impl Renderer {
             instance_count: self.scene.instances.len() as u32,
             flags: if reset { scene_gpu::FRAME_RESET_HISTORY } else { 0 }
                 | if self.scene_gpu.lights_changed { scene_gpu::FRAME_LIGHTS_CHANGED } else { 0 },
+            prev_jitter: self.prev_jitter,
         }
     }
 

@@ -151,6 +151,8 @@ pub struct FrameUniforms {
     pub sky_color: [f32; 3],
     pub instance_count: u32,
     pub flags: u32,
+    /// Last frame's `jitter`: what a reprojection onto last frame's texels corrects for.
+    pub prev_jitter: [f32; 2],
 }
 
 /// `FrameUniforms::flags`: the first frame, or a camera cut: no temporal history is valid.
