@@ -5,7 +5,7 @@
 // vectors with bilinear taps that each pass the validity test (on screen, same instance,
 // depth, geometric normal); the new frame is blended in with max(alpha, 1/history). The input
 // is cleaned first: NaN/Inf samples are dropped (and counted) and luminance outliers clamped to
-// mean + k sigma of their 7x7 neighbourhood (3x3 once the history is established), so neither
+// mean + k sigma of their 7x7 neighbourhood (3x3 where there is any history), so neither
 // poisons the history; what the clamp takes out is handed to the neighbours on the pixel's
 // surface (out_*clamped, which the first a-trous iteration adds), so no light is lost.
 //
@@ -16,11 +16,15 @@
 //
 // The colour's alpha holds its luminance variance (as the deviation, svgf_pack), what the
 // a-trous iterations scale their luminance weight by: from the temporal moments, or, while the
-// history is shorter than SVGF_MOMENTS_FRAMES, estimated over the same 7x7 neighbourhood of
-// this frame's samples with the edge-stopping weights (and boosted by 4 / history, as
-// Falcor). Schied et al. estimate it from the neighbours' accumulated moments in a pass of its
-// own; one frame's samples are what a young history holds (all of it at a disocclusion), and
-// the window is loaded anyway.
+// history is shorter than SVGF_MOMENTS_FRAMES, estimated over the same neighbourhood of this
+// frame's samples with the edge-stopping weights (and boosted by 4 / history, as Falcor).
+// Schied et al. estimate it from the neighbours' accumulated moments in a pass of its own; one
+// frame's samples are what a young history holds (all of it at a disocclusion), and the window
+// is loaded anyway. A signal with some history, but less than that, takes it over the 3x3
+// window: the 7x7 walk of those pixels (most of them where radiance cache cells restarted one
+// to three frames before) cost `svgf_temporal` about a tenth of its time at 1920x1080 on
+// lavapipe, at the same error in `bench sweep` and `bench stability` (README, "What a young
+// history costs").
 //
 // The pair accumulates diffuse and specular in one dispatch, because the pass is bound by its
 // loads: the G-buffer texels, the window's guide texels and, where the two histories are
@@ -182,16 +186,17 @@ int tile_index(ivec2 d) {
     return t.y * TILE_SIDE + t.x;
 }
 
-// What the 7x7 neighbourhood of this frame's samples says about pixel `px`, per signal.
+// What the neighbourhood of this frame's samples says about pixel `px`, per signal.
 struct Neighbourhood {
     float clamp_limit;  // luminance above which the sample is an outlier (infinite: clamp off)
     float variance;     // the spatial variance estimate (only for a young history)
     vec3 blurred;       // the edge-aware mean of the clamped samples (only without history)
 };
 
-// One pass over the 7x7 neighbourhood (surface pixels only), for each signal, for the outlier
-// clamp's bound, mean + k sigma of the luminance, which takes a firefly out of the history
-// before anything accumulates it; and, for a young history (`young`), the luminance variance
+// One pass over the neighbourhood (surface pixels only; 7x7 for a signal without history, 3x3
+// for the others), for each signal, for the outlier clamp's bound, mean + k sigma of the
+// luminance, which takes a firefly out of the history before anything accumulates it; and,
+// for a young history (`young`), the luminance variance
 // around `l` (this pixel's clamped luminance, which the luminance weight needs, so the clamp's
 // bound is found first and the window read twice only then) and, with `blur` (no history at
 // all), the edge-aware mean of the clamped samples on this pixel's instance.
@@ -209,15 +214,15 @@ struct Neighbourhood {
 // at 16 it held 0.979, the give-back then having less to spread.
 #define SVGF_ESTABLISHED_SIGMA_SCALE 3.0
 
-// Adds tap d of the outlier windows to the sums of each signal whose window holds it (a young
-// history's 7x7, an established one's 3x3), if it is on a surface.
-void clamp_tap(ivec2 d, bool young[SIGNALS], inout float sum[SIGNALS], inout float sum2[SIGNALS],
+// Adds tap d of the outlier windows to the sums of each signal whose window holds it (`wide`:
+// the 7x7 of a signal without history; else the 3x3), if it is on a surface.
+void clamp_tap(ivec2 d, bool wide[SIGNALS], inout float sum[SIGNALS], inout float sum2[SIGNALS],
                inout float n[SIGNALS], inout float brightest[SIGNALS]) {
     int t = tile_index(d);
     if (!svgf_guide_surface(tile_guide[t])) return;
     bool inner = max(abs(d.x), abs(d.y)) <= 1;
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-        if (young[s] || inner) {
+        if (wide[s] || inner) {
             float l = tile_luminance[s][t];
             sum[s] += l;
             sum2[s] += l * l;
@@ -228,33 +233,37 @@ void clamp_tap(ivec2 d, bool young[SIGNALS], inout float sum[SIGNALS], inout flo
 }
 
 // The window is walked once for all signals: each tap's guide texel is loaded once. `young[s]`:
-// signal s's history is younger than SVGF_MOMENTS_FRAMES (7x7 window, spatial variance);
-// `blur[s]`: it has none at all (the window's mean too).
+// signal s's history is younger than SVGF_MOMENTS_FRAMES (spatial variance); `blur[s]`: it has
+// none at all (the 7x7 window, and its mean too).
 void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], bool young[SIGNALS],
                    bool blur[SIGNALS], out Neighbourhood nb[SIGNALS]) {
     // clamp_sigma = infinity switches the clamp off (the impulse-response test does).
     bool clamped = !isinf(svgf.clamp_sigma);
-    bool any_young = false, any_blur = false;
+    bool any_young = false, any_blur = false, any_wide = false;
+    bool wide[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         nb[s] = Neighbourhood(1.0 / 0.0, 0.0, vec3(0.0));
+        wide[s] = young[s] && blur[s];
         any_young = any_young || young[s];
         any_blur = any_blur || blur[s];
+        any_wide = any_wide || wide[s];
     }
     float sum[SIGNALS], sum2[SIGNALS], n[SIGNALS], brightest[SIGNALS];
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) sum[s] = sum2[s] = n[s] = brightest[s] = 0.0;
-    // A young history's window is 7x7 (its spatial variance needs it), an established one's 3x3,
-    // whose taps are unrolled (constant tile offsets).
-    if (clamped && any_young) {
+    // A signal without history takes the 7x7 window (its mean stands for its sample, and a
+    // disocclusion's first variance needs the samples), the others the 3x3, whose taps are
+    // unrolled (constant tile offsets).
+    if (clamped && any_wide) {
         for (int dy = -3; dy <= 3; ++dy) {
             for (int dx = -3; dx <= 3; ++dx) {
                 // The centre is left out, so a lone firefly cannot widen its own bound.
-                if (dx != 0 || dy != 0) clamp_tap(ivec2(dx, dy), young, sum, sum2, n, brightest);
+                if (dx != 0 || dy != 0) clamp_tap(ivec2(dx, dy), wide, sum, sum2, n, brightest);
             }
         }
     } else if (clamped) {
         [[unroll]] for (int i = 0; i < 8; ++i) {
             int j = i < 4 ? i : i + 1;  // the centre, 4, is left out
-            clamp_tap(ivec2(j % 3, j / 3) - 1, young, sum, sum2, n, brightest);
+            clamp_tap(ivec2(j % 3, j / 3) - 1, wide, sum, sum2, n, brightest);
         }
     }
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
@@ -277,8 +286,9 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
         blurred[s] = vec3(0.0);
         wsum[s] = blur_wsum[s] = 0.0;
     }
-    for (int dy = -3; dy <= 3; ++dy) {
-        for (int dx = -3; dx <= 3; ++dx) {
+    int r = any_wide ? 3 : 1;
+    for (int dy = -r; dy <= r; ++dy) {
+        for (int dx = -r; dx <= r; ++dx) {
             ivec2 q = px + ivec2(dx, dy);
             if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
             int t = tile_index(ivec2(dx, dy));
@@ -287,8 +297,9 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
             float inv_z_scale = 1.0 / (svgf.sigma_z * fwidth_z * length(vec2(dx, dy)) + 1e-4);
             float e_geometry = svgf_depth_exponent(g.w, gq.w, inv_z_scale) + svgf_normal_exponent(g.xyz, gq.xyz);
             bool same_instance = any_blur && imageLoad(g_ids, q).x == id;
+            bool inner = max(abs(dx), abs(dy)) <= 1;
             [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
-                if (young[s]) {
+                if (young[s] && (wide[s] || inner)) {
                     float lq_raw = tile_luminance[s][t];
                     float lq = min(lq_raw, nb[s].clamp_limit);
                     // The luminance weight uses a fixed scale: there is no variance to scale it yet.
@@ -322,7 +333,7 @@ void neighbourhood(ivec2 px, vec4 g, uint id, float fwidth_z, vec3 c[SIGNALS], b
 // 2026-12-04 each pixel took back a share of the clamped light of the brightest neighbour on
 // its surface, estimated against its own bound: where many pixels pass their bounds (gi at
 // full rate: 6% of the pixels holding a quarter of the light) that returned about half.
-// Spread over the 8 neighbours, not a young history's 7x7 window, because the a-trous
+// Spread over the 8 neighbours, not a 7x7 window, because the a-trous
 // iteration's step-1 taps are those 8, already loaded. Only a pixel that gives shares writes
 // them, and says so by the sign of its colour's alpha (svgf_flag), which the a-trous taps load
 // anyway: stored for every pixel and loaded by every tap, the shares made the temporal pass
@@ -359,17 +370,20 @@ const float GLOSSY_CAP_ROUGHNESS = 0.5;
 
 // The bilinear weights of the previous frame's four texels around `prev_pos` (continuous pixel
 // coordinates), zero for each that fails the validity test (svgf_consistent) against this
-// pixel's depth z, geometric normal ng and instance id.
+// pixel's depth z, geometric normal ng and instance id. A texel without bilinear weight is not
+// tested: where the camera holds still, the reprojection lands on a texel's centre, and that
+// texel's three loads are all the test needs, where it took twelve.
 vec4 reprojection_weights(vec2 prev_pos, float z, float fw_tolerance, vec3 ng, uint id) {
     vec2 base = floor(prev_pos - 0.5);
     vec2 f = prev_pos - 0.5 - base;
     vec4 w = vec4(0.0);
     [[unroll]] for (int i = 0; i < 4; ++i) {
         ivec2 q = ivec2(base) + ivec2(i & 1, i >> 1);
-        if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size))) &&
+        float bilinear = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+        if (bilinear > 0.0 && all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(frame.size))) &&
             svgf_consistent(z, imageLoad(prev_depth, q).r, fw_tolerance, ng, imageLoad(prev_normal_geo, q).xyz, id,
                             imageLoad(prev_ids, q).x)) {
-            w[i] = ((i & 1) == 1 ? f.x : 1.0 - f.x) * ((i >> 1) == 1 ? f.y : 1.0 - f.y);
+            w[i] = bilinear;
         }
     }
     return w;
@@ -459,7 +473,7 @@ void main() {
             // the weight, and a history resampled off-centre every frame would be blurred a
             // little more every frame. At an edge the jitter shows one surface in one frame and
             // the other in the next, and without this each edge pixel restarted its history,
-            // and walked its young window (above), every other frame or so.
+            // and walked the 7x7 window (above), every other frame or so.
             if (dot(tap_w[s], vec4(1.0)) <= 1e-3 && frame.prev_jitter != frame.jitter) {
                 prev_pos[s] += frame.prev_jitter - frame.jitter;
                 tap_w[s] = reprojection_weights(prev_pos[s], z, fw_tolerance[s], ng, id);
@@ -487,7 +501,7 @@ void main() {
         len[s] = blur[s] ? 1.0 : min(hist_len / wsum + 1.0, cap[s]);
         // A signal the a-trous iterations leave as it is (a mirror's, footprint 0) is never
         // young: its spatial variance and its window's mean would go unused, and a mirror's
-        // history, capped at GLOSSY_HISTORY_CAP frames, would walk the 7x7 window every frame.
+        // history, capped at GLOSSY_HISTORY_CAP frames, would walk its window every frame.
         young[s] = len[s] < SVGF_MOMENTS_FRAMES && footprint[s] > 0.0;
     }
     Neighbourhood nb[SIGNALS];
