@@ -21,8 +21,9 @@
 //
 // Mode 1, the view (one invocation per pixel): what the cache holds at each G-buffer surface,
 // for dumps and the viewer (radiance_cache.irradiance: rgb = C, a = samples), and where a cell
-// there restarted on a change this frame (radiance_cache.changed), which tells SVGF's temporal
-// pass that the diffuse history there holds light that is gone.
+// there restarted on a change this frame, or everywhere where a tenth of the cells did
+// (radiance_cache.changed), which tells SVGF's temporal pass and TAA that the history there
+// holds light that is gone.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
@@ -53,6 +54,16 @@ layout(push_constant) uniform Params {
 #define RC_RESTART_SHARE 0.1
 // A restarted cell that answered the last sample changed it if its value moved by this share.
 #define RC_RESTART_MOVED 0.5
+// Where more than this share of the cells updated this frame restarted, the change is taken to
+// be one of the scene's light as a whole, as a change of the lights that the frame announces
+// is: every pixel's diffuse and TAA histories let go (radiance_cache.changed everywhere). About
+// half the cells of a region whose light changed notice it, and a history that no cell around
+// it flagged kept the old light for its whole window. A moving object restarts a few cells a
+// frame (the default scene's ball: at most 0.75% of those updated, over 64 frames); a box
+// closing around a light restarts a third in the first frame and an eighth in the second (an
+// eighth, then a fourteenth, where gi resamples the light; README, "Stability where methods
+// fail").
+#define RC_CHANGED_EVERYWHERE 0.1
 
 // Whether what cell's last sample saw at its first vertex changed (see the top): false unless
 // that sample was taken last frame.
@@ -203,8 +214,10 @@ void view(ivec2 px) {
     uint slot = rc_find(p, imageLoad(g_normal_geo, px).xyz, false);
     imageStore(out_irradiance, px, slot == RC_NONE ? vec4(0.0) : rc_cells[slot].radiance[rc_copy_written(frame.frame_index)]);
     // No cell restarted this frame (a still scene, always): none to look for around p.
-    bool any_restarted = rc.restarted[frame.frame_index % 3u] != 0u;
-    imageStore(out_changed, px, vec4(any_restarted && restarted_near(p, imageLoad(g_normal_geo, px).xyz) ? 1.0 : 0.0));
+    uint restarted = rc.restarted[frame.frame_index % 3u];
+    bool everywhere = float(restarted) > RC_CHANGED_EVERYWHERE * float(max(rc.updated[frame.frame_index % 3u], 1u));
+    bool here = everywhere || restarted != 0u && restarted_near(p, imageLoad(g_normal_geo, px).xyz);
+    imageStore(out_changed, px, vec4(here ? 1.0 : 0.0));
 }
 
 void main() {

@@ -178,6 +178,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let bar = crate::progress::progress_bar(a.frames as u64, "frames");
     for n in 1..=a.frames {
         renderer.render_frame()?;
+        if log::log_enabled!(log::Level::Debug) {
+            log::debug!("frame {n}: radiance cache {:?}", renderer.radiance_cache_stats());
+        }
         let dump_now = if a.dump_frames.is_empty() { n == a.frames } else { a.dump_frames.contains(&n) };
         if let (Some(c), true) = (capture.as_mut(), dump_now) {
             c.dump(&mut renderer)?;
