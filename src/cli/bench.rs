@@ -192,6 +192,31 @@ struct SweepArgs {
     shader_dir: Option<PathBuf>,
 }
 
+/// The name of each scene's charts: its file's stem, or, where another scene of the sweep has
+/// the same stem (`tests/mitsuba/*/scene.gltf`), its folder's name and the stem.
+fn chart_names(scenes: &[String]) -> Result<Vec<String>> {
+    let part = |p: Option<&std::ffi::OsStr>| bench::slug(&p.map(|f| f.to_string_lossy()).unwrap_or_default());
+    let stems: Vec<String> = scenes.iter().map(|s| part(Path::new(s).file_stem())).collect();
+    let names: Vec<String> = scenes
+        .iter()
+        .zip(&stems)
+        .map(|(s, stem)| {
+            if stems.iter().filter(|&other| other == stem).count() == 1 {
+                return stem.clone();
+            }
+            let folder = part(Path::new(s).parent().and_then(Path::file_name));
+            if folder.is_empty() { stem.clone() } else { format!("{folder}-{stem}") }
+        })
+        .collect();
+    if let Some(twice) = names.iter().enumerate().find(|&(i, n)| names[..i].contains(n)) {
+        bail!(
+            "two scenes would write the charts named {}: their charts would overwrite each other; sweep them separately",
+            twice.1
+        );
+    }
+    Ok(names)
+}
+
 fn run_sweep(a: &SweepArgs) -> Result<()> {
     let sizes = a.size.iter().map(|s| parse_size(s)).collect::<Result<Vec<_>>>()?;
     let configs = if a.configs.is_empty() {
@@ -207,19 +232,15 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
     let out = a.out.clone().unwrap_or_else(|| bench::default_output("sweep").with_extension(""));
     let json_path = out.join("sweep.json");
     // Every output is checked before hours of rendering, not after.
-    let charts: Vec<(PathBuf, PathBuf)> = scenes
-        .iter()
-        .flat_map(|s| {
-            let stem = bench::slug(&Path::new(s).file_stem().map(|f| f.to_string_lossy()).unwrap_or_default());
+    let charts: Vec<(PathBuf, PathBuf)> = chart_names(&scenes)?
+        .into_iter()
+        .flat_map(|name| {
             let out = &out;
             sizes
                 .iter()
-                .map(move |(w, h)| (out.join(format!("{stem}-{w}x{h}.png")), out.join(format!("{stem}-{w}x{h}.svg"))))
+                .map(move |(w, h)| (out.join(format!("{name}-{w}x{h}.png")), out.join(format!("{name}-{w}x{h}.svg"))))
         })
         .collect();
-    if charts.iter().collect::<std::collections::HashSet<_>>().len() != charts.len() {
-        bail!("two scenes share a file name: their charts would overwrite each other; sweep them separately");
-    }
     image_io::check_overwrite(&json_path, a.force)?;
     for (png, svg) in &charts {
         image_io::check_overwrite(png, a.force)?;
@@ -276,4 +297,31 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
     image_io::write_atomic(&json_path, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
     println!("wrote {}", json_path.display());
     finish_validation(ctx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::chart_names;
+
+    fn names(scenes: &[&str]) -> anyhow::Result<Vec<String>> {
+        chart_names(&scenes.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn scenes_of_one_file_name_are_told_apart_by_their_folders() {
+        let got = names(&[
+            "tests/mitsuba/diffuse_box/scene.gltf",
+            "tests/mitsuba/glossy_blocks/scene.gltf",
+            "assets/cornell.gltf",
+        ])
+        .unwrap();
+        assert_eq!(got, ["diffuse-box-scene", "glossy-blocks-scene", "cornell"]);
+        assert_eq!(names(&["builtin:many-lights"]).unwrap(), ["builtin-many-lights"]);
+    }
+
+    #[test]
+    fn the_same_scene_twice_is_refused() {
+        let err = names(&["a/scene.gltf", "a/scene.gltf"]).unwrap_err().to_string();
+        assert!(err.contains("a-scene"), "{err}");
+    }
 }
