@@ -1,10 +1,10 @@
 #version 460
 // composite: the hybrid frame in linear HDR radiance. Per G-buffer pixel:
 //   emission
-// + the first SHADOWED_LIGHTS punctual lights (Lambert + GGX) times their ray-traced
-//   visibility (the shadows chain, one channel each; coloured by shadows.tint where tinted
-//   glass is on the way)
-// + the diffuse signal (gi: emitters, environment, the other punctual lights resampled, every
+// + the first SHADOWED_LIGHTS punctual lights (Lambert + GGX), and the mesh lights in the
+//   channels they leave free (common/mesh_lights.glsl), times their ray-traced visibility (the
+//   shadows chain, one channel each; coloured by shadows.tint where tinted glass is on the way)
+// + the diffuse signal (gi: the other emitters, environment, the other punctual lights resampled, every
 //   bounce; demodulated) times the diffuse albedo
 // + the specular signal (reflections, with gi's specular lobe of the resampled lights, and
 //   what glass lets through).
@@ -17,11 +17,15 @@
 #include "common/gbuffer.glsl"
 #include "common/light_sampling.glsl"
 #include "common/shadow_tint.glsl"
+#include "common/mesh_lights.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform CompositeParams {
-    uint tinted;  // 1: shadows.tint colours the visibility (some thin glass is tinted)
+    uint tinted;             // 1: shadows.tint colours the visibility (some thin glass is tinted)
+    float roughness_cutoff;  // the reflections pass's (see mesh_light_radiance)
+    uvec4 mesh_first_emitter;  // per channel of the shadows chain, a mesh light's first emitter
+    uvec4 mesh_triangles;      // and its triangles (0: not a mesh light)
 } cp;
 
 layout(set = 1, binding = 0, rg32f) uniform readonly image2D g_depth;  // view depth, fwidth of view depth
@@ -69,6 +73,23 @@ float antialiased_roughness(ivec2 px, uint instance, vec3 n, float roughness) {
     return sqrt(sqrt(alpha * alpha + min(2.0 * SPECULAR_AA_VARIANCE * spread, SPECULAR_AA_MAX)));
 }
 
+// The unshadowed light of the mesh light on channel i toward the viewer: its irradiance in
+// closed form times the material's f at the direction it arrives from on average (exact for
+// the Lambert lobe; glTF's diffuse weight and the specular lobe are taken at that one
+// direction). On surfaces at or under the reflections' roughness cut-off the reflection rays
+// find the emitter, so only the diffuse lobe is composite's, as gi's reservoirs did.
+vec3 mesh_light_radiance(uint i, vec3 p, vec3 n, vec3 v, BrdfInput m, float transmission) {
+    vec3 f = mesh_light_form_factor(cp.mesh_first_emitter[i], cp.mesh_triangles[i], p, n);
+    float irradiance = dot(n, f);
+    if (!(irradiance > 0.0)) return vec3(0.0);
+    vec3 l = normalize(f);
+    float cos_l = dot(n, l);
+    if (cos_l <= 1e-4) return vec3(0.0);
+    vec3 lobe = m.roughness > cp.roughness_cutoff ? reflection_eval_cos(m, transmission, n, v, l)
+                                                  : (1.0 - transmission) * brdf_diffuse_cos(m, n, v, l);
+    return mesh_light_emission(cp.mesh_first_emitter[i]) * irradiance * lobe / cos_l;
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
@@ -97,10 +118,14 @@ void main() {
     vec4 vis = imageLoad(in_visibility, px);
     uvec4 tint = cp.tinted != 0u ? imageLoad(in_tint, px) : uvec4(0u);
     vec3 radiance = imageLoad(g_emissive, px).rgb;
-    for (uint i = 0u; i < min(frame.light_count, SHADOWED_LIGHTS); ++i) {
-        LightSample ls = sample_punctual(lights[i], p);
+    for (uint i = 0u; i < SHADOWED_LIGHTS; ++i) {
         vec3 through = vis[i] * shadow_tint_decode(tint[i]);
-        radiance += reflection_eval_cos(lit, transmission, n, v, ls.dir) * ls.radiance * through;
+        if (i < frame.light_count) {
+            LightSample ls = sample_punctual(lights[i], p);
+            radiance += reflection_eval_cos(lit, transmission, n, v, ls.dir) * ls.radiance * through;
+        } else if (cp.mesh_triangles[i] > 0u) {
+            radiance += mesh_light_radiance(i, p, n, v, m, transmission) * through;
+        }
     }
     // The diffuse signal is the lobe without its albedo (gi.comp).
     radiance += (1.0 - transmission) * brdf_diffuse_albedo(m) * texelFetch(in_diffuse, px, 0).rgb;

@@ -80,6 +80,7 @@ layout(push_constant) uniform Params {
     uint seed;
     float roughness_cutoff;  // the reflections pass's: rougher surfaces get gi.specular
     uint half_rate;          // 1: one pixel of each horizontal pair traced per frame (see main)
+    uint resampled_emitters; // 0: no emitter, or every one a mesh light of the shadows chain
 } params;
 
 #define SALT_GI 0x67690000u
@@ -116,7 +117,7 @@ vec2 shade(ivec2 px) {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = has_rough(px);
     bool diffuse = has_diffuse(px);
-    bool resampled = reservoirs_present();
+    bool resampled = reservoirs_present(params.resampled_emitters != 0u);
     uvec2 ids = imageLoad(g_ids, px).xy;
     // (A smooth metal takes only the resampled punctual lights' specular lobe here.)
     if (ids.x == NO_INSTANCE || !(diffuse || rough || resampled_lights_present())) {
@@ -320,7 +321,7 @@ void main() {
             if (sources != 0u) {
                 imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, -float(sources)));
                 imageStore(out_specular, px, vec4(0.0));
-                if (reservoirs_present()) {
+                if (reservoirs_present(params.resampled_emitters != 0u)) {
                     carry_reservoir(px);
                     imageStore(out_light_lost, px, vec4(lost, 0.0, 0.0));
                 }
@@ -328,6 +329,6 @@ void main() {
             }
         }
         lost = shade(px);
-        if (reservoirs_present()) imageStore(out_light_lost, px, vec4(lost, 0.0, 0.0));
+        if (reservoirs_present(params.resampled_emitters != 0u)) imageStore(out_light_lost, px, vec4(lost, 0.0, 0.0));
     }
 }

@@ -1,8 +1,9 @@
 #version 460
-// shadows: visibility of the first four punctual lights from every G-buffer surface, through
-// the trace interface (Ray Tracing Gems ch. 13, adaptive sampling).
+// shadows: visibility of the first four punctual lights, and of the mesh lights in the channels
+// they leave free, from every G-buffer surface, through the trace interface (Ray Tracing Gems
+// ch. 13, adaptive sampling).
 // - Hard lights (radius 0): one shadow ray every frame, stored as is.
-// - Area lights (sphere or disk): a per-pixel sample count 1..s_max carried from frame to
+// - Area lights (sphere, disk or mesh light): a per-pixel sample count 1..s_max carried from frame to
 //   frame (+1 while the filtered penumbra measure of last frame is above delta and the count
 //   below s_max; -1 once it is below delta and the count has not changed for 4 frames),
 //   s_max wherever reprojection fails (then all four cached frames are overwritten). A pixel
@@ -22,6 +23,7 @@
 #include "common/gbuffer.glsl"
 #include "common/light_sampling.glsl"
 #include "common/shadow_tint.glsl"
+#include "common/mesh_lights.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -55,23 +57,40 @@ const uint FORCED[16] = uint[16](0u, 3u, 2u, 1u, 2u, 1u, 0u, 3u, 0u, 3u, 2u, 1u,
 // Low-discrepancy point n of the R2 sequence (Roberts 2018).
 vec2 r2(uint n) { return fract(vec2(0.5) + float(n) * vec2(0.7548776662, 0.5698402910)); }
 
-// Fraction of the shadow rays toward `count` points of light i that reach it, per channel: a ray
-// through see-through surfaces counts with what passes them. Points that send no light here
-// (the back of a disk, outside a spot's cone) say nothing about occlusion and are left out;
-// with none left the light is unoccluded by definition (it sends nothing anyway).
-vec3 trace_visibility(uint i, vec3 origin, ivec2 px, uint count) {
+// Fraction of the shadow rays toward `count` points of the light on channel i that reach it,
+// per colour: a ray through see-through surfaces counts with what passes them. Points that send
+// no light here (the back of a disk or of a one-sided emitter, outside a spot's cone, a mesh
+// light's points below the surface `ng`) say nothing about occlusion and are left out; with
+// none left (`tested` false) a punctual light is unoccluded by definition (it sends nothing
+// anyway), and a mesh light is the caller's to decide. A mesh light's
+// points weigh by what each brings unshadowed (both cosines over the squared distance): the
+// ratio of the shadowed to the unshadowed estimate from the same points, which is what scales
+// composite's closed form right where near and far parts of a large panel are hidden
+// differently (counted alike, the penumbra of `tests/soft_shadows.rs`'s panel read 0.926 of the
+// reference's light).
+vec3 trace_visibility(uint i, vec3 origin, vec3 ng, ivec2 px, uint count, out bool tested) {
     uint set = ((frame.frame_index & 3u) * 9u + uint(px.y % 3) * 3u + uint(px.x % 3)) * count;
+    bool mesh = i >= punctual_channels();
     vec3 visible = vec3(0.0);
     float tried = 0.0;
     for (uint k = 0u; k < count; ++k) {
         // Sampled from the ray's origin, so direction and length are the ray's own.
-        NeeSample s = sample_punctual_light(i, origin, r2(set + k), 1.0);
-        if (dot(s.weight, s.weight) == 0.0) continue;
-        tried += 1.0;
+        NeeSample s = nee_none();
+        float weight = 1.0;
+        if (mesh) {
+            float g = mesh_light_point(sp.mesh_first_emitter[i], sp.mesh_triangles[i], origin, r2(set + k), s.dir, s.dist);
+            weight = g * dot(s.dir, ng);
+            if (!(weight > 0.0)) continue;
+        } else {
+            s = sample_punctual_light(i, origin, r2(set + k), 1.0);
+            if (dot(s.weight, s.weight) == 0.0) continue;
+        }
+        tried += weight;
         float tmax = s.dist >= LIGHT_FAR ? 1e30 : s.dist * (1.0 - 1e-4);
-        visible += trace_transmittance(origin, s.dir, 0.0, tmax, RAY_MASK_ALL);
+        visible += weight * trace_transmittance(origin, s.dir, 0.0, tmax, RAY_MASK_ALL);
     }
-    return tried > 0.0 ? visible / tried : vec3(1.0);
+    tested = tried > 0.0;
+    return tested ? visible / tried : vec3(1.0);
 }
 
 float grey(vec3 c) { return (c.r + c.g + c.b) / 3.0; }
@@ -123,15 +142,18 @@ void main() {
     uvec4 tint = uvec4(0u);
     vec4 state = vec4(0.0);
     bvec4 soft = soft_lights();
-    for (uint i = 0u; i < min(frame.light_count, 4u); ++i) {
-        LightSample ls = sample_punctual(lights[i], p);
-        if (dot(ls.radiance, ls.radiance) == 0.0) {
+    for (uint i = 0u; i < uint(SHADOW_LIGHTS); ++i) {
+        bool mesh = i >= punctual_channels();
+        if (mesh && sp.mesh_triangles[i] == 0u) break;
+        vec3 unshadowed = mesh ? vec3(1.0) : sample_punctual(lights[i], p).radiance;
+        if (dot(unshadowed, unshadowed) == 0.0) {
             // Culled by range (or outside a spot's cone): dark, no rays, nothing to filter.
             vis[i] = 0.0;
             continue;
         }
+        bool tested;
         if (!soft[i]) {
-            vec3 through = trace_visibility(i, origin, px, 1u);
+            vec3 through = trace_visibility(i, origin, ng, px, 1u, tested);
             vis[i] = grey(through);
             tint[i] = shadow_tint_encode(through);
             state[i] = 1.0;
@@ -155,9 +177,19 @@ void main() {
         state[i] = s;
         bool sample_now = !reprojected || dv[i] > sp.delta || forced;
         if (sample_now) {
-            vec3 through = trace_visibility(i, origin, px, uint(s));
+            vec3 through = trace_visibility(i, origin, ng, px, uint(s), tested);
             vis[i] = grey(through);
             tint[i] = shadow_tint_encode(through);
+            if (mesh && !tested) {
+                // Every point drawn lay below the surface or behind the emitting side, which
+                // happens where the mesh light straddles the surface's plane (a wall beside a
+                // ceiling panel). The closed form may still see a sliver of it above, which no
+                // ray has tested: keep what was known there (nothing at first, so that no light
+                // shines through a wall untested), not a guess whose swings between frames the
+                // penumbra detection would take for a penumbra (they kept such walls at s_max).
+                vis[i] = reprojected ? r0[i] : 0.0;
+                tint[i] = reprojected && sp.tinted != 0u ? imageLoad(prev_tint, q)[i] : 0u;
+            }
         } else {
             vis[i] = r0[i];
             if (sp.tinted != 0u) tint[i] = imageLoad(prev_tint, q)[i];

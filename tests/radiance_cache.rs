@@ -104,9 +104,15 @@ fn hybrid_luminance(ctx: &Arc<Context>, name: &str, cache: bool, half_rate: bool
 /// Mitsuba's).
 const MAX_LOST_SHARE: f64 = 0.01;
 
+/// (Since 2026-12-06 the rooms' ceiling panels are mesh lights of the shadows chain, not
+/// resampled, and `gi.light_lost` is 1x1: nothing to lose. The measurement above is from before;
+/// `tests/stability.rs`'s still room keeps the check for resampled lights.)
 fn lost_light_share(r: &mut Renderer, size: (u32, u32)) -> f64 {
     let lost = r.read_output(gi::LIGHT_LOST).unwrap();
-    assert_eq!((lost.width, lost.height), size, "the room's ceiling light must be resampled in gi's reservoirs");
+    if (lost.width, lost.height) == (1, 1) {
+        return 0.0;
+    }
+    assert_eq!((lost.width, lost.height), size, "gi.light_lost is frame-sized where a light is resampled");
     let Texels::F32(texels) = &lost.texels else { panic!("gi.light_lost is not float") };
     let flagged = texels.chunks_exact(lost.channels).filter(|t| t.iter().any(|&v| v > 0.0)).count();
     flagged as f64 / (lost.width * lost.height) as f64

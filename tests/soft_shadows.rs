@@ -4,15 +4,18 @@
 //! - sample counts go up in the penumbra and down to 1 where nothing changes; a camera cut
 //!   puts every sampled pixel at s_max; a tight budget lowers the counts;
 //! - a hard light (builtin:shadow-test) stays at one ray and is not filtered: the frame plan
-//!   leaves the filter passes out, and with `--full` they pass its visibility through.
+//!   leaves the filter passes out, and with `--full` they pass its visibility through;
+//! - a mesh light (an emissive panel in place of the sphere) gets the same: visibility,
+//!   adaptive counts, and a lit floor that matches the reference path tracer's.
 
 mod common;
 
 use glam::{Vec2, Vec3};
 use hybrid_rt::passes;
 use hybrid_rt::passes::shadows::{HARD_VISIBILITY, ShadowSettings, VISIBILITY};
-use hybrid_rt::render::{Renderer, Settings};
+use hybrid_rt::render::{Environment, RenderMode, Renderer, Settings};
 use hybrid_rt::scene::builtin::{self, shadow_test_facts as facts};
+use hybrid_rt::scene::{Instance, Material, Scene};
 
 const W: u32 = 96;
 const H: u32 = 72;
@@ -58,6 +61,56 @@ fn true_visibility(p: Vec3) -> f32 {
         }
     }
     visible as f32 / (n * n) as f32
+}
+
+/// The emissive panel of `panel_shadow_test`: side and radiance. Its centre is the sphere
+/// light's.
+const PANEL_SIDE: f32 = 0.8;
+const PANEL_RADIANCE: f32 = 12.0;
+
+/// soft_shadow_test with the sphere light replaced by a square emissive panel facing down
+/// (two triangles, one-sided): no punctual light, so the panel takes the shadows chain's first
+/// channel as a mesh light. Nothing lights the scene from outside.
+fn panel_shadow_test() -> Scene {
+    let mut s = builtin::shadow_test();
+    s.name = "panel-shadow-test".into();
+    s.lights.clear();
+    let material = s.materials.len() as u32;
+    s.materials.push(Material {
+        name: "panel".into(),
+        base_color_factor: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+        emissive_factor: Vec3::splat(PANEL_RADIANCE),
+        ..Material::default()
+    });
+    let mesh = s.meshes.len() as u32;
+    s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X * PANEL_SIDE, Vec3::Z * PANEL_SIDE, material));
+    let node = s.nodes.len() as u32;
+    s.nodes.push(common::node("panel", facts::SPHERE_LIGHT));
+    s.instances.push(Instance { mesh, node });
+    s
+}
+
+/// The share of the panel's light that reaches floor point p past the box: a stratified grid
+/// on the panel, each point weighed by what it brings (both cosines over the squared distance),
+/// as the shader weighs its rays.
+fn true_panel_visibility(p: Vec3) -> f32 {
+    let n = 48;
+    let (mut visible, mut all) = (0.0f32, 0.0f32);
+    for i in 0..n {
+        for j in 0..n {
+            let (u, v) = ((i as f32 + 0.5) / n as f32 - 0.5, (j as f32 + 0.5) / n as f32 - 0.5);
+            let q = facts::SPHERE_LIGHT + Vec3::new(u * PANEL_SIDE, 0.0, v * PANEL_SIDE);
+            let to = q - p;
+            let d = to.length();
+            // The panel faces straight down onto the floor: both cosines are the height over d.
+            let weight = (to.y / d).powi(2) / (d * d);
+            all += weight;
+            if !facts::ray_hits_box(p, to / d, d) {
+                visible += weight;
+            }
+        }
+    }
+    visible / all
 }
 
 /// Floor pixels (centre on the floor) with their floor point.
@@ -194,5 +247,84 @@ fn hard_lights_use_one_ray_and_no_filter() {
         }
     }
     drop(r);
+    common::assert_validation_clean(ctx);
+}
+
+#[test]
+fn a_mesh_light_gets_adaptive_soft_shadows() {
+    let ctx = common::validated_context();
+    let settings = ShadowSettings::default();
+    let base = Settings { shadows: settings, environment: Environment::default(), ..Default::default() };
+    let mut r = renderer_with(&ctx, panel_shadow_test(), base.clone());
+    assert_eq!(r.shadow_visibility(), VISIBILITY, "the panel's channel is soft: the whole chain runs");
+    common::render_frames(&mut r, 26);
+    let imgs = r
+        .read_outputs(&[
+            passes::gbuffer::IDS,
+            VISIBILITY,
+            passes::shadows::trace::SAMPLE_COUNT,
+            passes::shadows::trace::RING0,
+        ])
+        .unwrap();
+    let points = floor_points(&r, &imgs[0]);
+    let (mut err_filtered, mut err_raw, mut n) = (0.0f64, 0.0f64, 0);
+    let (mut penumbra_counts, mut penumbra_px, mut open_ones, mut open_px) = (0.0f64, 0, 0, 0);
+    for &(x, y, p) in &points {
+        let truth = true_panel_visibility(p);
+        if truth > 0.0 && truth < 1.0 {
+            err_filtered += (imgs[1].get(x, y, 0) - truth).abs() as f64;
+            err_raw += (imgs[3].get(x, y, 0) - truth).abs() as f64;
+            n += 1;
+        }
+        let count = imgs[2].get(x, y, 0);
+        assert!((1.0..=settings.s_max as f32).contains(&count), "count {count} at ({x},{y})");
+        if truth > 0.2 && truth < 0.8 {
+            penumbra_counts += count as f64;
+            penumbra_px += 1;
+        } else if truth == 1.0 {
+            open_px += 1;
+            if count == 1.0 {
+                open_ones += 1;
+            }
+        }
+    }
+    let (mae, mae_raw) = (err_filtered / n as f64, err_raw / n as f64);
+    let mean_penumbra = penumbra_counts / penumbra_px.max(1) as f64;
+    eprintln!(
+        "panel penumbra visibility MAE: filtered {mae:.4}, this frame's raw rays {mae_raw:.4} ({n} pixels); \
+         mean count {mean_penumbra:.2} over {penumbra_px} penumbra pixels; {open_ones} of {open_px} open pixels at 1 ray"
+    );
+    assert!(n > 60, "only {n} penumbra pixels");
+    assert!(mae < 0.05, "filtered visibility is off the true visibility by {mae} on average in the penumbra");
+    assert!(mae < 0.7 * mae_raw, "history and filtering did not help: {mae} vs raw {mae_raw}");
+    assert!(penumbra_px > 30 && mean_penumbra > 2.5, "penumbra: {penumbra_px} pixels, mean count {mean_penumbra}");
+    assert!(open_ones as f64 > 0.8 * open_px as f64, "only {open_ones} of {open_px} open pixels came down to 1 ray");
+
+    // The lit floor: the frame against the path tracer, over the whole floor and over the
+    // penumbra (composite's closed-form light times the chain's visibility, and gi leaving the
+    // panel out of its reservoirs: counted twice, the floor would read twice as bright).
+    let floor = |img: &hybrid_rt::image_io::CpuImage, penumbra: bool| {
+        let (mut sum, mut count) = (0.0f64, 0);
+        for &(x, y, p) in &points {
+            let truth = true_panel_visibility(p);
+            if penumbra && !(truth > 0.1 && truth < 0.9) {
+                continue;
+            }
+            sum += (0.2126 * img.get(x, y, 0) + 0.7152 * img.get(x, y, 1) + 0.0722 * img.get(x, y, 2)) as f64;
+            count += 1;
+        }
+        sum / count as f64
+    };
+    let frame = r.read_output(r.hdr_output()).unwrap();
+    drop(r);
+    let reference_settings = Settings { mode: RenderMode::Reference { seed: 3, max_bounces: 8 }, ..base };
+    let mut reference = renderer_with(&ctx, panel_shadow_test(), reference_settings);
+    common::render_frames(&mut reference, 256);
+    let truth = reference.read_output(reference.hdr_output()).unwrap();
+    drop(reference);
+    let (whole, penumbra) = (floor(&frame, false) / floor(&truth, false), floor(&frame, true) / floor(&truth, true));
+    eprintln!("panel-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
+    assert!((whole - 1.0).abs() < 0.03, "the floor reads {whole} of the reference's light");
+    assert!((penumbra - 1.0).abs() < 0.06, "the penumbra reads {penumbra} of the reference's light");
     common::assert_validation_clean(ctx);
 }

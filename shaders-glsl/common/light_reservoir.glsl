@@ -71,7 +71,10 @@ float emitter_share() {
 }
 
 // Whether pixels keep reservoirs: some punctual light is resampled, or some triangle emits.
-bool reservoirs_present() { return resampled_lights_present() || emitter_share() > 0.0; }
+// `emitters`: whether any emissive triangle is left to them (some are the shadows chain's mesh
+// lights, whose candidates weigh nothing here; with punctual lights resampled the chain has no
+// channel free, so then none is).
+bool reservoirs_present(bool emitters) { return resampled_lights_present() || (emitters && emitter_share() > 0.0); }
 
 // Whether light-table entry `light` is an emissive triangle, or a resampled punctual light.
 bool reservoir_emitter(uint light) {
@@ -98,6 +101,8 @@ NeeSample reservoir_light_sample(ShadingPoint sp, uint light, vec2 u, bool exact
     NeeSample s;
     if (reservoir_emitter(light)) {
         uint index = light - light_table.first_emitter_entry;
+        // A mesh light of the shadows chain is composite's: its candidates weigh nothing here.
+        if ((emitters[index].flags & EMITTER_IN_CHAIN) != 0u) return nee_none();
         if (exact) {
             s = sample_emitter(index, sp.origin, u, 1.0);
         } else {

@@ -42,6 +42,9 @@ struct LightEntry {
 };
 
 #define EMITTER_DOUBLE_SIDED 1u
+// A mesh light of the shadows chain (composite shades it; gi's reservoirs leave it out).
+// Rust: world::lights::EMITTER_IN_CHAIN.
+#define EMITTER_IN_CHAIN 2u
 // emitter_base[] of an instance that emits nothing.
 #define NO_EMITTER 0xffffffffu
 

@@ -1,8 +1,10 @@
 // Shared by the adaptive soft-shadow passes (shadows, shadows_penumbra, shadows_tent_h/_v,
 // shadows_filter), after Ray Tracing Gems ch. 13 (Boksansky, Wimmer, Bittner): visibility of
-// up to four punctual lights, one per RGBA channel; lights with a radius are area lights
-// (sphere for point lights, disk for spots) and get adaptive sample counts, filtering and a
-// 4-frame history; lights without one are hard: one ray, no filtering.
+// up to four lights, one per RGBA channel: the punctual lights first, then mesh lights in the
+// channels they leave free (common/mesh_lights.glsl). Punctual lights with a radius (sphere for
+// point lights, disk for spots) and mesh lights are area lights and get adaptive sample counts,
+// filtering and a 4-frame history; punctual lights without one are hard: one ray, no
+// filtering.
 #ifndef SHADOWS_COMMON_GLSL
 #define SHADOWS_COMMON_GLSL
 
@@ -18,12 +20,19 @@ layout(push_constant) uniform ShadowParams {
     uint forced_blocks;  // 1: 8x8 blocks rotating over 4 frames are always sampled
     uint tent_axis;      // shadows_tent: 0 horizontal, 1 vertical
     uint tinted;         // shadows: 1 when some thin glass is tinted (shadows.tint is written)
+    uvec4 mesh_first_emitter;  // per channel, a mesh light's first emitter
+    uvec4 mesh_triangles;      // per channel, a mesh light's triangles (0: not a mesh light)
 } sp;
 
-// Which of the first four lights are soft (have a radius): a bool per channel.
+// The channels of the punctual lights (the first ones).
+uint punctual_channels() { return min(frame.light_count, uint(SHADOW_LIGHTS)); }
+
+// Which channels are soft (a punctual light with a radius, or a mesh light): a bool each.
 bvec4 soft_lights() {
     bvec4 s = bvec4(false);
-    for (uint i = 0u; i < min(frame.light_count, 4u); ++i) s[i] = lights[i].radius > 0.0;
+    for (uint i = 0u; i < uint(SHADOW_LIGHTS); ++i) {
+        s[i] = i < punctual_channels() ? lights[i].radius > 0.0 : sp.mesh_triangles[i] > 0u;
+    }
     return s;
 }
 

@@ -22,7 +22,8 @@ pub struct PlanArgs {
 pub fn run(a: &PlanArgs) -> Result<()> {
     let scene = a.scene.load()?;
     let defaults = Settings::default();
-    let plan = FramePlan::for_scene(&scene, defaults.reflections.roughness_cutoff, defaults.light_grid);
+    let plan =
+        FramePlan::for_scene(&scene, defaults.reflections.roughness_cutoff, defaults.light_grid, defaults.mesh_lights);
     let lighting = default_light::choose(&a.environment.environment(), &scene);
     if a.json {
         #[derive(serde::Serialize)]

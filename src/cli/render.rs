@@ -81,6 +81,10 @@ pub struct RenderArgs {
     /// of from the light grid's cell: unbiased either way, noisier without; to check the grid.
     #[arg(long)]
     no_light_grid: bool,
+    /// Resample every emissive triangle in gi instead of giving small plain emissive meshes the
+    /// shadows chain's free channels (closed-form light, adaptive soft shadows).
+    #[arg(long)]
+    no_mesh_lights: bool,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -133,6 +137,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         environment: a.environment.environment(),
         brdf: a.brdf,
         light_grid: !a.no_light_grid,
+        mesh_lights: !a.no_mesh_lights,
         ..Default::default()
     };
     if let Some(b) = a.gi_bounces {

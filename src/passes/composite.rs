@@ -1,6 +1,6 @@
 //! composite: the frame in linear HDR (shaders-glsl/composite.comp): emission, punctual lights
-//! with their ray-traced visibility (and its colour through tinted glass), the diffuse signal
-//! remodulated by the albedo, and the specular signal.
+//! and mesh lights with their ray-traced visibility (and its colour through tinted glass), the
+//! diffuse signal remodulated by the albedo, and the specular signal.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
@@ -21,14 +21,21 @@ pub const COLOR: Output = Output::new(NAME, "color");
 struct Params {
     /// 1: `shadows.tint` colours the visibility (the frame plan's `tinted_shadows`).
     tinted: u32,
+    /// The reflections pass's: a mesh light's specular lobe on surfaces at or under it is the
+    /// reflection rays', above it composite's.
+    roughness_cutoff: f32,
+    _pad: [u32; 2],
+    mesh_lights: shadows::MeshLights,
 }
 
 /// `visibility`: the shadows chain's output (see shadows::Chain); `tinted`: the chain writes
-/// `shadows.tint`.
+/// `shadows.tint`; `mesh_lights`: the chain's channels that are mesh lights.
 pub fn new(
     b: &PassBuilder,
     visibility: Resource,
     tinted: bool,
+    mesh_lights: shadows::MeshLights,
+    roughness_cutoff: f32,
     diffuse: Resource,
     specular: Resource,
 ) -> Result<FullscreenPass> {
@@ -44,5 +51,12 @@ pub fn new(
         Input::filtered(specular).bound_as("in_specular"),
     ]);
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
-    FullscreenPass::new(b, NAME, "composite.comp", inputs, outputs, &Params { tinted: tinted as u32 })
+    FullscreenPass::new(
+        b,
+        NAME,
+        "composite.comp",
+        inputs,
+        outputs,
+        &Params { tinted: tinted as u32, roughness_cutoff, _pad: [0; 2], mesh_lights },
+    )
 }

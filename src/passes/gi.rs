@@ -41,6 +41,9 @@ pub struct Params {
     pub seed: u32,
     pub roughness_cutoff: f32,
     pub half_rate: u32,
+    /// 0: no emissive triangle is left to the reservoirs (none, or all in the shadows chain's
+    /// mesh lights).
+    pub resampled_emitters: u32,
 }
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -71,7 +74,8 @@ pub struct Signals {
 
 /// gi, and gi_fill after it at half rate.
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
-/// `reservoirs`: whether the plan leaves lights to gi's reservoirs (frame-sized then).
+/// `reservoirs`: whether the plan leaves lights to gi's reservoirs (frame-sized then);
+/// `resampled_emitters`: whether some of them are emissive triangles.
 pub fn new(
     b: &PassBuilder,
     s: &GiSettings,
@@ -79,6 +83,7 @@ pub fn new(
     roughness_cutoff: f32,
     cache: &Cache,
     reservoirs: bool,
+    resampled_emitters: bool,
 ) -> Result<Signals> {
     let mut inputs: Vec<Input> = [
         gbuffer::DEPTH,
@@ -103,7 +108,13 @@ pub fn new(
             "gi: half of the pixels traced each frame (a checkerboard), the others filled from their neighbours"
         );
     }
-    let push = Params { bounces: s.bounces.max(1), seed, roughness_cutoff, half_rate: s.half_rate.into() };
+    let push = Params {
+        bounces: s.bounces.max(1),
+        seed,
+        roughness_cutoff,
+        half_rate: s.half_rate.into(),
+        resampled_emitters: resampled_emitters.into(),
+    };
     let mut gi =
         FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)?;
     if !s.half_rate {

@@ -36,7 +36,9 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         passes.push(Box::new(passes::primary_rays::new(b)?));
     }
     let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
-    let shadows = passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows, plan.tinted_shadows)?;
+    let mesh_lights = passes::shadows::MeshLights::new(plan.light_order.len(), &plan.chain_emitters);
+    let shadows =
+        passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows, plan.tinted_shadows, mesh_lights)?;
     passes.extend(shadows.passes);
     kept.extend(shadows.kept);
     // gi's shadow rays toward the resampled lights and the emitters teach the light grid what
@@ -61,6 +63,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
             settings.reflections.roughness_cutoff,
             &cache,
             plan.reservoirs(),
+            plan.emitters > 0,
         )?;
         passes.extend(gi.passes);
         kept.push(passes::gi::kept(plan.reservoirs()));
@@ -111,6 +114,8 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         b,
         shadows.visibility.into(),
         plan.tinted_shadows,
+        mesh_lights,
+        settings.reflections.roughness_cutoff,
         diffuse,
         specular,
     )?));

@@ -64,6 +64,10 @@ pub struct Settings {
     /// Draw the resampled lights from the light grid (world::light_grid). Off
     /// (`--no-light-grid`): by power from all of them, what the grid is checked against.
     pub light_grid: bool,
+    /// Small plain emissive meshes take the shadows chain's channels the punctual lights leave
+    /// free (world::lights::chain_emitters). Off (`--no-mesh-lights`): every emissive triangle
+    /// is resampled in gi, as before 2026-12-06.
+    pub mesh_lights: bool,
 }
 
 /// Which frame the renderer builds.
@@ -105,6 +109,7 @@ impl Default for Settings {
             mode: RenderMode::Hybrid,
             brdf: brdf::BrdfModel::Gltf,
             light_grid: true,
+            mesh_lights: true,
         }
     }
 }
@@ -209,7 +214,12 @@ impl Renderer {
         let plan = if settings.full {
             plan::FramePlan::full(&scene)
         } else {
-            plan::FramePlan::for_scene(&scene, settings.reflections.roughness_cutoff, settings.light_grid)
+            plan::FramePlan::for_scene(
+                &scene,
+                settings.reflections.roughness_cutoff,
+                settings.light_grid,
+                settings.mesh_lights,
+            )
         };
         // The culled lights out, the rest in shading order (the shadowed ones first).
         scene.lights = plan.light_order.iter().map(|&i| scene.lights[i].clone()).collect();
@@ -236,6 +246,7 @@ impl Renderer {
             &environment,
             settings.brdf,
             settings.light_grid,
+            &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
         )?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
         let parts = frame_parts(&b, &settings, &plan)?;

@@ -41,8 +41,12 @@ pub struct FramePlan {
     pub light_order: Vec<usize>,
     /// Lights past the per-light-shadowed ones, resampled in gi.
     pub resampled_lights: usize,
-    /// Emissive triangles, resampled in gi with those lights.
+    /// Emissive triangles, resampled in gi with those lights (those of the chain's mesh lights
+    /// left out).
     pub emitters: u32,
+    /// The mesh lights that take the shadows chain's channels after the punctual lights
+    /// (world::lights::chain_emitters): (instance, first emitter, triangles).
+    pub chain_emitters: Vec<(u32, u32, u32)>,
     /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
     /// cells by it.
     pub scene_diagonal: f32,
@@ -60,6 +64,7 @@ impl FramePlan {
     /// Everything on (`--full`).
     pub fn full(scene: &Scene) -> Self {
         let light_order = crate::world::lights::shading_order(scene, &[], MAX_SHADOWED_LIGHTS);
+        let chain_emitters = crate::world::lights::chain_emitters(scene, light_order.len());
         Self {
             reflections: true,
             soft_shadows: true,
@@ -67,7 +72,8 @@ impl FramePlan {
             gi: true,
             culled_lights: Vec::new(),
             resampled_lights: light_order.len().saturating_sub(MAX_SHADOWED_LIGHTS),
-            emitters: crate::world::lights::emitter_bases(scene).1,
+            emitters: crate::world::lights::emitter_bases(scene).1 - chain_triangles(&chain_emitters),
+            chain_emitters,
             light_order,
             scene_diagonal: scene_diagonal(scene),
             reasons: vec!["--full: every pass runs".into()],
@@ -76,7 +82,9 @@ impl FramePlan {
 
     /// `light_grid`: the resampled lights' candidates are drawn from the light grid
     /// (`Settings::light_grid`), which only the reason's text depends on.
-    pub fn for_scene(scene: &Scene, roughness_cutoff: f32, light_grid: bool) -> Self {
+    /// `mesh_lights`: small emissive meshes may take the shadows chain's free channels
+    /// (`Settings::mesh_lights`).
+    pub fn for_scene(scene: &Scene, roughness_cutoff: f32, light_grid: bool, mesh_lights: bool) -> Self {
         let mut reasons = Vec::new();
 
         let glossy: Vec<&str> = scene
@@ -105,17 +113,25 @@ impl FramePlan {
         let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
         let light_order = crate::world::lights::shading_order(scene, &culled_lights, MAX_SHADOWED_LIGHTS);
         let shadowed = &light_order[..light_order.len().min(MAX_SHADOWED_LIGHTS)];
-        let soft: Vec<&str> =
+        let mut soft: Vec<&str> =
             shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
+        let chain_emitters =
+            if mesh_lights { crate::world::lights::chain_emitters(scene, light_order.len()) } else { Vec::new() };
+        let mesh_lights: Vec<&str> = chain_emitters.iter().map(|&(i, ..)| instance_name(scene, i)).collect();
+        soft.extend(&mesh_lights);
         let soft_shadows = !soft.is_empty();
         reasons.push(if soft_shadows {
-            format!("shadows: adaptive soft shadows for {} light(s) with a radius: {}", soft.len(), list(&soft))
+            format!(
+                "shadows: adaptive soft shadows for {} light(s) with a radius or an area: {}",
+                soft.len(),
+                list(&soft)
+            )
         } else {
             "shadows: every light is punctual: one hard-shadow ray per light, no penumbra detection or filter".into()
         });
-        // The chain shadows only punctual lights (emitters and the sky go through gi, whose
-        // light samples keep the colour).
-        let tinted = if shadowed.is_empty() { Vec::new() } else { tinted_glass(scene) };
+        // The chain shadows punctual lights and mesh lights (other emitters and the sky go
+        // through gi, whose light samples keep the colour).
+        let tinted = if shadowed.is_empty() && chain_emitters.is_empty() { Vec::new() } else { tinted_glass(scene) };
         let tinted_shadows = !tinted.is_empty();
         if tinted_shadows {
             reasons.push(format!(
@@ -164,7 +180,17 @@ impl FramePlan {
             )
         });
 
-        let emitters = crate::world::lights::emitter_bases(scene).1;
+        if !mesh_lights.is_empty() {
+            reasons.push(format!(
+                "mesh lights: {} emissive mesh(es) of at most {} triangles take the shadows chain's free \
+                 channel(s) (composite integrates their unshadowed light exactly, the chain's adaptive \
+                 shadow rays give the share that arrives, gi's reservoirs leave them out): {}",
+                mesh_lights.len(),
+                crate::world::lights::MAX_CHAIN_EMITTER_TRIANGLES,
+                list(&mesh_lights)
+            ));
+        }
+        let emitters = crate::world::lights::emitter_bases(scene).1 - chain_triangles(&chain_emitters);
         if emitters > 0 {
             reasons.push(format!(
                 "emitters: {emitters} emissive triangle(s), resampled in gi{}: per pixel one point on one of \
@@ -206,10 +232,20 @@ impl FramePlan {
             light_order,
             resampled_lights,
             emitters,
+            chain_emitters,
             scene_diagonal: scene_diagonal(scene),
             reasons,
         }
     }
+}
+
+fn chain_triangles(chain: &[(u32, u32, u32)]) -> u32 {
+    chain.iter().map(|c| c.2).sum()
+}
+
+/// An instance's name in the plan: its mesh's.
+fn instance_name(scene: &Scene, instance: u32) -> &str {
+    scene.meshes[scene.instances[instance as usize].mesh as usize].name.as_str()
 }
 
 fn scene_diagonal(scene: &Scene) -> f32 {
@@ -310,9 +346,9 @@ mod tests {
 
     #[test]
     fn punctual_only_scenes_get_hard_shadows_and_matte_ones_no_reflection_rays() {
-        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true);
+        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true);
         assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true);
         assert!(p.soft_shadows);
     }
 
@@ -321,7 +357,7 @@ mod tests {
         let tinted_with = |m: crate::scene::Material| {
             let mut s = builtin::shadow_test();
             s.materials[0] = m;
-            FramePlan::for_scene(&s, 0.6, true).tinted_shadows
+            FramePlan::for_scene(&s, 0.6, true, true).tinted_shadows
         };
         let glass = |rgb: Vec3| crate::scene::Material {
             name: "glass".into(),
@@ -341,11 +377,11 @@ mod tests {
             ..Default::default()
         };
         assert!(!tinted_with(blend), "blended surfaces let 1 - alpha through, grey");
-        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true).tinted_shadows);
+        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true).tinted_shadows);
         let mut unlit = builtin::shadow_test();
         unlit.materials[0] = glass(Vec3::new(1.0, 0.5, 0.25));
         unlit.lights.clear();
-        assert!(!FramePlan::for_scene(&unlit, 0.6, true).tinted_shadows, "no punctual light: nothing to shadow");
+        assert!(!FramePlan::for_scene(&unlit, 0.6, true, true).tinted_shadows, "no punctual light: nothing to shadow");
     }
 
     #[test]
@@ -364,18 +400,18 @@ mod tests {
         });
         far.node = node;
         s.lights.push(far);
-        let p = FramePlan::for_scene(&s, 0.6, true);
+        let p = FramePlan::for_scene(&s, 0.6, true, true);
         assert_eq!(p.culled_lights, vec![1], "{:?}", p.reasons);
         // The same light in reach stays.
         s.nodes[node as usize].translation = Vec3::new(0.0, 1.5, 0.0);
-        assert!(FramePlan::for_scene(&s, 0.6, true).culled_lights.is_empty());
-        assert_eq!(FramePlan::for_scene(&s, 0.6, true).light_order, vec![0, 1]);
+        assert!(FramePlan::for_scene(&s, 0.6, true, true).culled_lights.is_empty());
+        assert_eq!(FramePlan::for_scene(&s, 0.6, true, true).light_order, vec![0, 1]);
     }
 
     #[test]
     fn lights_past_the_shadowed_four_are_resampled_and_the_plan_names_the_four() {
         let s = crate::scene::builtin_many_lights::many_lights();
-        let p = FramePlan::for_scene(&s, 0.6, true);
+        let p = FramePlan::for_scene(&s, 0.6, true, true);
         // (The camera room's highest lights reach no surface with their short range: culled.)
         assert_eq!(p.light_order.len(), s.lights.len() - p.culled_lights.len());
         assert_eq!(p.resampled_lights, p.light_order.len() - MAX_SHADOWED_LIGHTS);
@@ -386,11 +422,11 @@ mod tests {
         }
         assert!(line.contains("light_grid_update"), "{line}");
         // Without the light grid the line says where the candidates come from instead.
-        let p = FramePlan::for_scene(&s, 0.6, false);
+        let p = FramePlan::for_scene(&s, 0.6, false, true);
         let line = p.reasons.iter().find(|r| r.starts_with("many lights")).expect("no many-lights line");
         assert!(line.contains("--no-light-grid") && !line.contains("light_grid_update"), "{line}");
         // Four lights or fewer: none resampled, the scene's order kept.
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true);
         assert_eq!((p.resampled_lights, p.light_order.clone()), (0, vec![0]));
     }
 }

@@ -48,6 +48,13 @@ pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
 pub const LIGHT_KIND_EMITTER: u32 = 1;
 pub const LIGHT_KIND_ENVIRONMENT: u32 = 2;
 pub const EMITTER_DOUBLE_SIDED: u32 = 1;
+/// The emitter belongs to a mesh light of the shadows chain (`chain_emitters`): composite
+/// shades it, so gi's reservoirs leave it out. Mirrors EMITTER_IN_CHAIN in
+/// common/light_sampling.glsl.
+pub const EMITTER_IN_CHAIN: u32 = 2;
+/// The most triangles a mesh light of the shadows chain may have: composite integrates each
+/// one's unshadowed light in closed form, per pixel.
+pub const MAX_CHAIN_EMITTER_TRIANGLES: usize = 8;
 /// Bytes before the emitters' groups at binding 22: their count, padded.
 const EMITTER_GROUPS_HEADER: usize = 16;
 /// `emitter_base` of an instance that emits nothing.
@@ -138,6 +145,8 @@ pub struct LightTables {
     grid_enabled: bool,
     /// Instances whose material emits, and their transforms when the table was last built.
     emissive: Vec<u32>,
+    /// The instances that are mesh lights of the shadows chain (the frame plan's).
+    chain: Vec<u32>,
     built_for: Option<Vec<Mat4>>,
     /// Powers of the punctual lights and of the environment (fixed for the scene).
     punctual_powers: Vec<f32>,
@@ -155,6 +164,7 @@ impl LightTables {
         pose: &Pose,
         env: &EnvironmentData,
         grid_enabled: bool,
+        chain: &[u32],
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let (bases, emitter_count) = emitter_bases(scene);
@@ -230,6 +240,7 @@ impl LightTables {
             grid_at_load,
             grid_enabled,
             emissive: emissive_instances(scene),
+            chain: chain.to_vec(),
             built_for: None,
             punctual_powers,
             env_power: 4.0 * PI * PI * radius * radius * luminance(env.mean),
@@ -354,7 +365,7 @@ impl LightTables {
         if self.built_for.as_ref() == Some(&now) {
             return Ok(false);
         }
-        let emitters = emitters(scene, pose);
+        let emitters = emitters(scene, pose, &self.chain);
         let mut powers: Vec<(u32, u32, f32)> = Vec::with_capacity(self.punctual_powers.len() + emitters.len() + 1);
         powers.extend(self.punctual_powers.iter().enumerate().map(|(i, &p)| (LIGHT_KIND_PUNCTUAL, i as u32, p)));
         self.emitter_points = emitters.iter().map(|e| (centroid(e), emitter_power(scene, e))).collect();
@@ -406,8 +417,48 @@ pub fn emitter_bases(scene: &Scene) -> (Vec<u32>, u32) {
     (bases, next)
 }
 
-/// Every triangle of every emissive instance in world space, in emitter order.
-pub fn emitters(scene: &Scene, pose: &Pose) -> Vec<GpuEmitter> {
+/// The mesh lights of the shadows chain: the emissive instances that take the chain's channels
+/// left free by the `punctual` lights kept (it has SHADOWED_LIGHTS), brightest first. Such an
+/// instance must emit its material's factor alone (no emissive texture), be opaque and rigid,
+/// and have at most MAX_CHAIN_EMITTER_TRIANGLES triangles: composite then integrates its
+/// unshadowed light exactly (the polygons' form factors), and the chain's adaptive shadow rays
+/// give the share that arrives. Each is given as (instance, first emitter, triangles).
+pub fn chain_emitters(scene: &Scene, punctual: usize) -> Vec<(u32, u32, u32)> {
+    let free = SHADOWED_LIGHTS.saturating_sub(punctual);
+    let (bases, _) = emitter_bases(scene);
+    let pose = scene.evaluate(0.0);
+    let mut candidates: Vec<((u32, u32, u32), f32)> = (0..scene.instances.len() as u32)
+        .filter(|&i| bases[i as usize] != NO_EMITTER)
+        .filter_map(|i| {
+            let inst = &scene.instances[i as usize];
+            let mesh = &scene.meshes[inst.mesh as usize];
+            let material = &scene.materials[mesh.material as usize];
+            let fits = material.emissive_texture.is_none()
+                && material.alpha_mode == crate::scene::AlphaMode::Opaque
+                && !material.is_transmissive()
+                && !scene.deforms(inst.mesh)
+                && mesh.triangle_count() <= MAX_CHAIN_EMITTER_TRIANGLES;
+            let world = pose.world[inst.node as usize];
+            let area: f32 = mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let p = |k: usize| world.transform_point3(Vec3::from(mesh.vertices[t[k] as usize].position));
+                    0.5 * (p(1) - p(0)).cross(p(2) - p(0)).length()
+                })
+                .sum();
+            let sides = if material.double_sided { 2.0 } else { 1.0 };
+            let power = PI * luminance(material.emissive_factor) * area * sides;
+            (fits && power > 0.0).then_some(((i, bases[i as usize], mesh.triangle_count() as u32), power))
+        })
+        .collect();
+    candidates.sort_by(|a, b| b.1.total_cmp(&a.1));
+    candidates.into_iter().take(free).map(|(c, _)| c).collect()
+}
+
+/// Every triangle of every emissive instance in world space, in emitter order; those of the
+/// instances in `chain` (the shadows chain's mesh lights) flagged EMITTER_IN_CHAIN.
+pub fn emitters(scene: &Scene, pose: &Pose, chain: &[u32]) -> Vec<GpuEmitter> {
     let mut out = Vec::new();
     for i in emissive_instances(scene) {
         let inst = &scene.instances[i as usize];
@@ -416,7 +467,8 @@ pub fn emitters(scene: &Scene, pose: &Pose) -> Vec<GpuEmitter> {
         // A mirroring transform flips the winding; the front side stays where the object-space
         // winding puts it, which is the side the ray backends call front.
         let side = world.determinant().signum();
-        let flags = if scene.materials[mesh.material as usize].double_sided { EMITTER_DOUBLE_SIDED } else { 0 };
+        let sides = if scene.materials[mesh.material as usize].double_sided { EMITTER_DOUBLE_SIDED } else { 0 };
+        let flags = sides | if chain.contains(&i) { EMITTER_IN_CHAIN } else { 0 };
         for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
             let p = |k: usize| world.transform_point3(Vec3::from(mesh.vertices[tri[k] as usize].position));
             let (p0, p1, p2) = (p(0), p(1), p(2));
@@ -540,12 +592,13 @@ mod tests {
         let s = emissive_scene(Vec3::new(2.0, 3.0, 1.0), false);
         let pose = s.evaluate(0.0);
         assert_eq!(emitter_bases(&s), (vec![NO_EMITTER, 0], 2));
-        let e = emitters(&s, &pose);
+        let e = emitters(&s, &pose, &[1]);
         assert_eq!(e.len(), 2);
         let area: f32 = e.iter().map(|e| e.area).sum();
         assert!((area - 6.0).abs() < 1e-5, "scaled square has area 2 x 3, got {area}");
+        // A mesh light of the shadows chain.
         for (t, em) in e.iter().enumerate() {
-            assert_eq!((em.instance, em.primitive, em.flags), (1, t as u32, 0));
+            assert_eq!((em.instance, em.primitive, em.flags), (1, t as u32, EMITTER_IN_CHAIN));
             assert!(Vec3::from(em.normal).abs_diff_eq(Vec3::Z, 1e-6), "{:?}", em.normal);
             assert!((em.p0[1] - 3.0).abs() < 1.5 + 1e-5, "translated to y = 3: {:?}", em.p0);
         }
@@ -556,10 +609,42 @@ mod tests {
     #[test]
     fn a_mirroring_transform_keeps_the_front_side() {
         let s = emissive_scene(Vec3::new(-1.0, 1.0, 1.0), true);
-        let e = emitters(&s, &s.evaluate(0.0));
+        let e = emitters(&s, &s.evaluate(0.0), &[1]);
         // Mirrored in x, the winding turns over, but the quad still faces +Z.
         assert!(Vec3::from(e[0].normal).abs_diff_eq(Vec3::Z, 1e-6), "{:?}", e[0].normal);
-        assert_eq!(e[0].flags, EMITTER_DOUBLE_SIDED);
+        assert_eq!(e[0].flags, EMITTER_DOUBLE_SIDED | EMITTER_IN_CHAIN);
+    }
+
+    #[test]
+    fn small_plain_emitters_take_the_channels_the_punctual_lights_leave() {
+        let mut s = emissive_scene(Vec3::ONE, false);
+        // A brighter lamp, a textured one and one of too many triangles beside the first.
+        let bright = s.materials.len() as u32;
+        s.materials.push(Material { emissive_factor: Vec3::splat(5.0), ..s.materials[1].clone() });
+        let textured = s.materials.len() as u32;
+        s.materials.push(Material {
+            emissive_texture: Some(crate::scene::TextureRef { texture: 0, uv_set: 0, transform: glam::Mat3::IDENTITY }),
+            ..s.materials[1].clone()
+        });
+        s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X, Vec3::Y, bright));
+        s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X, Vec3::Y, textured));
+        s.meshes.push(builtin::uv_sphere(1.0, 8, 4, bright));
+        for mesh in 2..5 {
+            s.instances.push(Instance { mesh, node: 1 });
+        }
+        let (bases, _) = emitter_bases(&s);
+        // The bright quad first, then the first lamp; the textured quad and the sphere never.
+        let chain = chain_emitters(&s, 0);
+        assert_eq!(chain, vec![(2, bases[2], 2), (1, bases[1], 2)]);
+        assert_eq!(chain_emitters(&s, 3), vec![(2, bases[2], 2)], "one channel left by 3 punctual lights");
+        assert!(chain_emitters(&s, 4).is_empty(), "4 punctual lights leave none");
+        let chain: Vec<u32> = chain.iter().map(|c| c.0).collect();
+        let flagged: Vec<u32> = emitters(&s, &s.evaluate(0.0), &chain)
+            .iter()
+            .filter(|e| e.flags & EMITTER_IN_CHAIN != 0)
+            .map(|e| e.instance)
+            .collect();
+        assert_eq!(flagged, vec![1, 1, 2, 2]);
     }
 
     /// The structs match light_sampling.glsl's scalar layout: 4-byte members, vec3 unpadded.

@@ -208,6 +208,7 @@ impl SceneGpu {
         environment: &EnvironmentData,
         brdf: super::brdf::BrdfModel,
         light_grid: bool,
+        mesh_lights: &[u32],
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Acceleration-structure builds read the geometry by device address.
@@ -298,7 +299,7 @@ impl SceneGpu {
         let mut bindings = scene_bindings(texture_bindings.len() as u32);
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
-        let light_tables = LightTables::new(ctx, pool, scene, pose, environment, light_grid)?;
+        let light_tables = LightTables::new(ctx, pool, scene, pose, environment, light_grid, mesh_lights)?;
         let brdf_data = gpu::upload::device_buffer(ctx, pool, "brdf_data", &super::brdf::gpu_data(brdf), storage)?;
         let set_layout = DescriptorSetLayout::new(ctx, &bindings, false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;

@@ -7,6 +7,8 @@
 //!
 //! Lights with a radius (sphere lights for points, disk lights for spots) are soft: adaptive
 //! sample counts 1..s_max, filtering, history. Lights without one are hard: one ray, no filter.
+//! Channels the punctual lights leave free go to mesh lights (small emissive meshes,
+//! world::lights::chain_emitters), which are soft like sphere lights.
 //! The final visibility is `shadows_filter.visibility`, one channel per light, grey; the colour
 //! of tinted glass on the way goes beside it, unfiltered, in `shadows.tint`.
 
@@ -70,10 +72,35 @@ pub struct Params {
     pub tent_axis: u32,
     /// 1: some thin glass is tinted and the trace pass writes `shadows.tint` (the frame plan).
     pub tinted: u32,
+    pub _pad: u32,
+    pub mesh_lights: MeshLights,
+}
+
+/// Per channel of the chain, the mesh light on it: its first emitter and its triangles (0: the
+/// channel is a punctual light's, or free). common/shadows_common.glsl's `MeshLights`.
+#[repr(C)]
+#[derive(Clone, Copy, Default, Pod, Zeroable)]
+pub struct MeshLights {
+    pub first_emitter: [u32; MAX_SHADOWED_LIGHTS],
+    pub triangles: [u32; MAX_SHADOWED_LIGHTS],
+}
+
+impl MeshLights {
+    /// The channels after the `punctual` lights' go to `chain` ((instance, first emitter,
+    /// triangles): world::lights::chain_emitters), in order.
+    pub fn new(punctual: usize, chain: &[(u32, u32, u32)]) -> Self {
+        let mut m = Self::default();
+        for (k, &(_, first, triangles)) in chain.iter().enumerate() {
+            let channel = punctual.min(MAX_SHADOWED_LIGHTS) + k;
+            m.first_emitter[channel] = first;
+            m.triangles[channel] = triangles;
+        }
+        m
+    }
 }
 
 impl ShadowSettings {
-    fn push_constants(&self, pixels: u32, tent_axis: u32, tinted: bool) -> Params {
+    fn push_constants(&self, pixels: u32, tent_axis: u32, tinted: bool, mesh_lights: MeshLights) -> Params {
         Params {
             s_max: self.s_max.max(1),
             delta: self.delta,
@@ -82,6 +109,8 @@ impl ShadowSettings {
             forced_blocks: self.forced_blocks as u32,
             tent_axis,
             tinted: tinted as u32,
+            _pad: 0,
+            mesh_lights,
         }
     }
 }
@@ -100,9 +129,17 @@ pub struct Chain {
 /// The chain's passes. With `soft` false (every light punctual, the frame plan's call) only the
 /// trace pass runs: one hard-shadow ray per light, nothing kept, nothing filtered. With `tinted`
 /// false (no tinted thin glass, the plan's call) `shadows.tint` is 1x1 and holds no tint.
-pub fn chain(b: &PassBuilder, s: &ShadowSettings, extent: vk::Extent2D, soft: bool, tinted: bool) -> Result<Chain> {
+/// `mesh_lights`: the channels of the mesh lights.
+pub fn chain(
+    b: &PassBuilder,
+    s: &ShadowSettings,
+    extent: vk::Extent2D,
+    soft: bool,
+    tinted: bool,
+    mesh_lights: MeshLights,
+) -> Result<Chain> {
     let pixels = extent.width * extent.height;
-    let push = |axis| s.push_constants(pixels, axis, tinted);
+    let push = |axis| s.push_constants(pixels, axis, tinted, mesh_lights);
     if !soft {
         let trace = trace::new(b, &push(0), false, tinted)?;
         return Ok(Chain { passes: vec![Box::new(trace)], kept: Vec::new(), visibility: HARD_VISIBILITY });
