@@ -11,6 +11,7 @@
 mod common;
 
 use glam::{Vec2, Vec3};
+use hybrid_rt::image_io::CpuImage;
 use hybrid_rt::passes;
 use hybrid_rt::passes::shadows::{HARD_VISIBILITY, ShadowSettings, VISIBILITY};
 use hybrid_rt::render::{Environment, RenderMode, Renderer, Settings};
@@ -114,7 +115,7 @@ fn true_panel_visibility(p: Vec3) -> f32 {
 }
 
 /// Floor pixels (centre on the floor) with their floor point.
-fn floor_points(r: &Renderer, ids: &hybrid_rt::image_io::CpuImage) -> Vec<(u32, u32, Vec3)> {
+fn floor_points(r: &Renderer, ids: &CpuImage) -> Vec<(u32, u32, Vec3)> {
     let view = r.last_view.unwrap();
     let size = Vec2::new(W as f32, H as f32);
     let mut out = Vec::new();
@@ -128,6 +129,73 @@ fn floor_points(r: &Renderer, ids: &hybrid_rt::image_io::CpuImage) -> Vec<(u32, 
         }
     }
     out
+}
+
+/// What the chain made of a light's penumbra on the floor, against the true visibility.
+#[derive(Debug)]
+struct Penumbra {
+    /// Pixels with a true visibility strictly between 0 and 1, and the filtered and the raw
+    /// (this frame's rays) visibility's mean absolute error over them.
+    pixels: usize,
+    mae: f64,
+    mae_raw: f64,
+    /// Pixels well inside the penumbra (true visibility 0.2..0.8) and their mean ray count.
+    deep: usize,
+    deep_count: f64,
+    /// Unshadowed pixels, and how many of them came down to 1 ray.
+    open: usize,
+    open_at_one: usize,
+}
+
+impl Penumbra {
+    fn measure(
+        points: &[(u32, u32, Vec3)],
+        truth: impl Fn(Vec3) -> f32,
+        filtered: &CpuImage,
+        raw: &CpuImage,
+        counts: &CpuImage,
+        s_max: u32,
+    ) -> Self {
+        let (mut err, mut err_raw, mut deep_sum) = (0.0f64, 0.0f64, 0.0f64);
+        let mut p = Penumbra { pixels: 0, mae: 0.0, mae_raw: 0.0, deep: 0, deep_count: 0.0, open: 0, open_at_one: 0 };
+        for &(x, y, point) in points {
+            let truth = truth(point);
+            if truth > 0.0 && truth < 1.0 {
+                err += (filtered.get(x, y, 0) - truth).abs() as f64;
+                err_raw += (raw.get(x, y, 0) - truth).abs() as f64;
+                p.pixels += 1;
+            }
+            let count = counts.get(x, y, 0);
+            assert!((1.0..=s_max as f32).contains(&count), "count {count} at ({x},{y})");
+            if truth > 0.2 && truth < 0.8 {
+                deep_sum += count as f64;
+                p.deep += 1;
+            } else if truth == 1.0 {
+                p.open += 1;
+                p.open_at_one += (count == 1.0) as usize;
+            }
+        }
+        p.mae = err / p.pixels.max(1) as f64;
+        p.mae_raw = err_raw / p.pixels.max(1) as f64;
+        p.deep_count = deep_sum / p.deep.max(1) as f64;
+        p
+    }
+
+    /// Close to the truth, closer than one frame's rays, more rays in the penumbra and 1 where
+    /// nothing changes; over at least `pixels` penumbra pixels, `deep` of them well inside.
+    fn check(&self, pixels: usize, deep: usize) {
+        let Penumbra { pixels: n, mae, mae_raw, deep_count, .. } = *self;
+        assert!(n > pixels, "only {n} penumbra pixels");
+        assert!(mae < 0.05, "filtered visibility is off the true visibility by {mae} on average in the penumbra");
+        assert!(mae < 0.7 * mae_raw, "history and filtering did not help: {mae} vs raw {mae_raw}");
+        assert!(self.deep > deep && deep_count > 2.5, "penumbra: {} pixels, mean count {deep_count}", self.deep);
+        assert!(
+            self.open_at_one as f64 > 0.8 * self.open as f64,
+            "only {} of {} unshadowed pixels came down to 1 ray",
+            self.open_at_one,
+            self.open
+        );
+    }
 }
 
 #[test]
@@ -149,39 +217,9 @@ fn soft_shadows_converge_with_adaptive_counts() {
     common::render_frames(&mut r, 25);
     let imgs =
         r.read_outputs(&[VISIBILITY, passes::shadows::trace::SAMPLE_COUNT, passes::shadows::trace::RING0]).unwrap();
-    // Errors over the penumbra, where there is something to get wrong.
-    let (mut err_filtered, mut err_raw, mut n) = (0.0f64, 0.0f64, 0);
-    let (mut penumbra_counts, mut penumbra_px, mut open_ones, mut open_px) = (0.0f64, 0, 0, 0);
-    for &(x, y, p) in &points {
-        let truth = true_visibility(p);
-        if truth > 0.0 && truth < 1.0 {
-            err_filtered += (imgs[0].get(x, y, 0) - truth).abs() as f64;
-            err_raw += (imgs[2].get(x, y, 0) - truth).abs() as f64;
-            n += 1;
-        }
-        let count = imgs[1].get(x, y, 0);
-        assert!((1.0..=settings.s_max as f32).contains(&count), "count {count} at ({x},{y})");
-        if truth > 0.2 && truth < 0.8 {
-            penumbra_counts += count as f64;
-            penumbra_px += 1;
-        } else if truth == 1.0 {
-            open_px += 1;
-            if count == 1.0 {
-                open_ones += 1;
-            }
-        }
-    }
-    let (mae, mae_raw) = (err_filtered / n as f64, err_raw / n as f64);
-    eprintln!("penumbra visibility MAE: filtered {mae:.4}, this frame's raw rays {mae_raw:.4} ({n} pixels)");
-    assert!(n > 100, "only {n} penumbra pixels");
-    assert!(mae < 0.05, "filtered visibility is off the true visibility by {mae} on average in the penumbra");
-    assert!(mae < 0.7 * mae_raw, "history and filtering did not help: {mae} vs raw {mae_raw}");
-    let mean_penumbra = penumbra_counts / penumbra_px.max(1) as f64;
-    assert!(penumbra_px > 50 && mean_penumbra > 2.5, "penumbra: {penumbra_px} pixels, mean count {mean_penumbra}");
-    assert!(
-        open_ones as f64 > 0.8 * open_px as f64,
-        "only {open_ones} of {open_px} unshadowed pixels came down to 1 ray"
-    );
+    let p = Penumbra::measure(&points, true_visibility, &imgs[0], &imgs[2], &imgs[1], settings.s_max);
+    eprintln!("sphere light: {p:?}");
+    p.check(100, 50);
 
     // A camera cut invalidates every cache: all sampled pixels go to s_max.
     r.camera_cut();
@@ -267,43 +305,14 @@ fn a_mesh_light_gets_adaptive_soft_shadows() {
         ])
         .unwrap();
     let points = floor_points(&r, &imgs[0]);
-    let (mut err_filtered, mut err_raw, mut n) = (0.0f64, 0.0f64, 0);
-    let (mut penumbra_counts, mut penumbra_px, mut open_ones, mut open_px) = (0.0f64, 0, 0, 0);
-    for &(x, y, p) in &points {
-        let truth = true_panel_visibility(p);
-        if truth > 0.0 && truth < 1.0 {
-            err_filtered += (imgs[1].get(x, y, 0) - truth).abs() as f64;
-            err_raw += (imgs[3].get(x, y, 0) - truth).abs() as f64;
-            n += 1;
-        }
-        let count = imgs[2].get(x, y, 0);
-        assert!((1.0..=settings.s_max as f32).contains(&count), "count {count} at ({x},{y})");
-        if truth > 0.2 && truth < 0.8 {
-            penumbra_counts += count as f64;
-            penumbra_px += 1;
-        } else if truth == 1.0 {
-            open_px += 1;
-            if count == 1.0 {
-                open_ones += 1;
-            }
-        }
-    }
-    let (mae, mae_raw) = (err_filtered / n as f64, err_raw / n as f64);
-    let mean_penumbra = penumbra_counts / penumbra_px.max(1) as f64;
-    eprintln!(
-        "panel penumbra visibility MAE: filtered {mae:.4}, this frame's raw rays {mae_raw:.4} ({n} pixels); \
-         mean count {mean_penumbra:.2} over {penumbra_px} penumbra pixels; {open_ones} of {open_px} open pixels at 1 ray"
-    );
-    assert!(n > 60, "only {n} penumbra pixels");
-    assert!(mae < 0.05, "filtered visibility is off the true visibility by {mae} on average in the penumbra");
-    assert!(mae < 0.7 * mae_raw, "history and filtering did not help: {mae} vs raw {mae_raw}");
-    assert!(penumbra_px > 30 && mean_penumbra > 2.5, "penumbra: {penumbra_px} pixels, mean count {mean_penumbra}");
-    assert!(open_ones as f64 > 0.8 * open_px as f64, "only {open_ones} of {open_px} open pixels came down to 1 ray");
+    let p = Penumbra::measure(&points, true_panel_visibility, &imgs[1], &imgs[3], &imgs[2], settings.s_max);
+    eprintln!("panel: {p:?}");
+    p.check(60, 30);
 
     // The lit floor: the frame against the path tracer, over the whole floor and over the
     // penumbra (composite's closed-form light times the chain's visibility, and gi leaving the
     // panel out of its reservoirs: counted twice, the floor would read twice as bright).
-    let floor = |img: &hybrid_rt::image_io::CpuImage, penumbra: bool| {
+    let floor = |img: &CpuImage, penumbra: bool| {
         let (mut sum, mut count) = (0.0f64, 0);
         for &(x, y, p) in &points {
             let truth = true_panel_visibility(p);
