@@ -4,8 +4,8 @@
 // + the first SHADOWED_LIGHTS punctual lights (Lambert + GGX), and the mesh lights in the
 //   channels they leave free (common/mesh_lights.glsl), times their ray-traced visibility (the
 //   shadows chain, one channel each; coloured by shadows.tint where tinted glass is on the way)
-// + the diffuse signal (gi: the other emitters, environment, the other punctual lights resampled, every
-//   bounce; demodulated) times the diffuse albedo
+// + the diffuse signal (gi: the other emitters, environment, the other punctual lights
+//   resampled, every bounce; demodulated) times the diffuse albedo
 // + the specular signal (reflections, with gi's specular lobe of the resampled lights, and
 //   what glass lets through).
 // Pixels that hit nothing show the environment.

@@ -3,8 +3,8 @@
 // they leave free, from every G-buffer surface, through the trace interface (Ray Tracing Gems
 // ch. 13, adaptive sampling).
 // - Hard lights (radius 0): one shadow ray every frame, stored as is.
-// - Area lights (sphere, disk or mesh light): a per-pixel sample count 1..s_max carried from frame to
-//   frame (+1 while the filtered penumbra measure of last frame is above delta and the count
+// - Area lights (sphere, disk or mesh light): a per-pixel sample count 1..s_max carried from
+//   frame to frame (+1 while the filtered penumbra measure of last frame is above delta and the count
 //   below s_max; -1 once it is below delta and the count has not changed for 4 frames),
 //   s_max wherever reprojection fails (then all four cached frames are overwritten). A pixel
 //   outside any penumbra is sampled only when its 8x8 block's turn comes (every 4th frame)
@@ -62,12 +62,11 @@ vec2 r2(uint n) { return fract(vec2(0.5) + float(n) * vec2(0.7548776662, 0.56984
 // no light here (the back of a disk or of a one-sided emitter, outside a spot's cone, a mesh
 // light's points below the surface `ng`) say nothing about occlusion and are left out; with
 // none left (`tested` false) a punctual light is unoccluded by definition (it sends nothing
-// anyway), and a mesh light is the caller's to decide. A mesh light's
-// points weigh by what each brings unshadowed (both cosines over the squared distance): the
-// ratio of the shadowed to the unshadowed estimate from the same points, which is what scales
-// composite's closed form right where near and far parts of a large panel are hidden
-// differently (counted alike, the penumbra of `tests/soft_shadows.rs`'s panel read 0.926 of the
-// reference's light).
+// anyway), and a mesh light is the caller's to decide. A mesh light's points weigh by what each
+// brings unshadowed (both cosines over the squared distance): the ratio of the shadowed to the
+// unshadowed estimate from the same points, which is what scales composite's closed form right
+// where near and far parts of a large panel are hidden differently (counted alike, the
+// penumbra of `tests/soft_shadows.rs`'s panel read 0.926 of the reference's light).
 vec3 trace_visibility(uint i, vec3 origin, vec3 ng, ivec2 px, uint count, out bool tested) {
     uint set = ((frame.frame_index & 3u) * 9u + uint(px.y % 3) * 3u + uint(px.x % 3)) * count;
     bool mesh = i >= punctual_channels();

@@ -79,6 +79,8 @@ vec3 mesh_light_form_factor(uint first, uint count, vec3 p, vec3 n) {
 }
 
 // The mesh light's radiance (one material, no texture: its emissive factor).
-vec3 mesh_light_emission(uint first) { return materials[instances[emitters[first].instance].material].emissive_factor; }
+vec3 mesh_light_emission(uint first) {
+    return materials[instances[emitters[first].instance].material].emissive_factor;
+}
 
 #endif
