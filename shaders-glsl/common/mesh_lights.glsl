@@ -59,8 +59,11 @@ vec3 triangle_form_factor(vec3 n, vec3 a, vec3 b, vec3 c) {
     vec3 f = vec3(0.0);
     for (uint i = 0u; i < k; ++i) f += form_factor_edge(poly[i], poly[(i + 1u) % k]);
     f *= 0.5;
-    // The winding decides the sign; the polygon lies on the side of its vertices.
-    return dot(f, a + b + c) < 0.0 ? -f : f;
+    // The winding decides the sign. The clipped polygon lies above the surface, so its
+    // projection on n (the irradiance) is positive. (Oriented toward the unclipped triangle's
+    // centroid instead, which may lie below the surface, a triangle across the horizon took
+    // light away.)
+    return dot(f, n) < 0.0 ? -f : f;
 }
 
 // The mesh light's vector form factor at point p for normal n: int w cos dw over what of its
