@@ -212,7 +212,7 @@ impl Renderer {
             );
         }
         let plan = if settings.full {
-            plan::FramePlan::full(&scene)
+            plan::FramePlan::full(&scene, settings.mesh_lights)
         } else {
             plan::FramePlan::for_scene(
                 &scene,

@@ -61,10 +61,10 @@ impl FramePlan {
         self.resampled_lights > 0 || self.emitters > 0
     }
 
-    /// Everything on (`--full`).
-    pub fn full(scene: &Scene) -> Self {
+    /// Everything on (`--full`); `mesh_lights` as in [`FramePlan::for_scene`].
+    pub fn full(scene: &Scene, mesh_lights: bool) -> Self {
         let light_order = crate::world::lights::shading_order(scene, &[], MAX_SHADOWED_LIGHTS);
-        let chain_emitters = crate::world::lights::chain_emitters(scene, light_order.len());
+        let chain_emitters = chain_emitters(scene, light_order.len(), mesh_lights);
         Self {
             reflections: true,
             soft_shadows: true,
@@ -115,8 +115,7 @@ impl FramePlan {
         let shadowed = &light_order[..light_order.len().min(MAX_SHADOWED_LIGHTS)];
         let mut soft: Vec<&str> =
             shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
-        let chain_emitters =
-            if mesh_lights { crate::world::lights::chain_emitters(scene, light_order.len()) } else { Vec::new() };
+        let chain_emitters = chain_emitters(scene, light_order.len(), mesh_lights);
         let mesh_lights: Vec<&str> = chain_emitters.iter().map(|&(i, ..)| instance_name(scene, i)).collect();
         soft.extend(&mesh_lights);
         let soft_shadows = !soft.is_empty();
@@ -239,13 +238,21 @@ impl FramePlan {
     }
 }
 
+/// The mesh lights (world::lights::chain_emitters), none when they are off.
+fn chain_emitters(scene: &Scene, punctual: usize, mesh_lights: bool) -> Vec<(u32, u32, u32)> {
+    if mesh_lights { crate::world::lights::chain_emitters(scene, punctual) } else { Vec::new() }
+}
+
 fn chain_triangles(chain: &[(u32, u32, u32)]) -> u32 {
     chain.iter().map(|c| c.2).sum()
 }
 
-/// An instance's name in the plan: its mesh's.
+/// An instance's name in the plan: its node's (instances of one mesh differ by it), else its
+/// mesh's.
 fn instance_name(scene: &Scene, instance: u32) -> &str {
-    scene.meshes[scene.instances[instance as usize].mesh as usize].name.as_str()
+    let inst = &scene.instances[instance as usize];
+    let node = scene.nodes[inst.node as usize].name.as_str();
+    if node.is_empty() { scene.meshes[inst.mesh as usize].name.as_str() } else { node }
 }
 
 fn scene_diagonal(scene: &Scene) -> f32 {

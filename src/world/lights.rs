@@ -426,9 +426,14 @@ pub fn emitter_bases(scene: &Scene) -> (Vec<u32>, u32) {
 pub fn chain_emitters(scene: &Scene, punctual: usize) -> Vec<(u32, u32, u32)> {
     let free = SHADOWED_LIGHTS.saturating_sub(punctual);
     let (bases, _) = emitter_bases(scene);
-    let pose = scene.evaluate(0.0);
-    let mut candidates: Vec<((u32, u32, u32), f32)> = (0..scene.instances.len() as u32)
-        .filter(|&i| bases[i as usize] != NO_EMITTER)
+    // Each emissive instance's power at time 0, summed over its triangles as the light table
+    // weighs them.
+    let mut power = vec![0.0f32; scene.instances.len()];
+    for e in emitters(scene, &scene.evaluate(0.0), &[]) {
+        power[e.instance as usize] += emitter_power(scene, &e);
+    }
+    let mut candidates: Vec<(u32, u32, u32)> = (0..scene.instances.len() as u32)
+        .filter(|&i| power[i as usize] > 0.0)
         .filter_map(|i| {
             let inst = &scene.instances[i as usize];
             let mesh = &scene.meshes[inst.mesh as usize];
@@ -438,22 +443,12 @@ pub fn chain_emitters(scene: &Scene, punctual: usize) -> Vec<(u32, u32, u32)> {
                 && !material.is_transmissive()
                 && !scene.deforms(inst.mesh)
                 && mesh.triangle_count() <= MAX_CHAIN_EMITTER_TRIANGLES;
-            let world = pose.world[inst.node as usize];
-            let area: f32 = mesh
-                .indices
-                .chunks_exact(3)
-                .map(|t| {
-                    let p = |k: usize| world.transform_point3(Vec3::from(mesh.vertices[t[k] as usize].position));
-                    0.5 * (p(1) - p(0)).cross(p(2) - p(0)).length()
-                })
-                .sum();
-            let sides = if material.double_sided { 2.0 } else { 1.0 };
-            let power = PI * luminance(material.emissive_factor) * area * sides;
-            (fits && power > 0.0).then_some(((i, bases[i as usize], mesh.triangle_count() as u32), power))
+            fits.then_some((i, bases[i as usize], mesh.triangle_count() as u32))
         })
         .collect();
-    candidates.sort_by(|a, b| b.1.total_cmp(&a.1));
-    candidates.into_iter().take(free).map(|(c, _)| c).collect()
+    candidates.sort_by(|a, b| power[b.0 as usize].total_cmp(&power[a.0 as usize]));
+    candidates.truncate(free);
+    candidates
 }
 
 /// Every triangle of every emissive instance in world space, in emitter order; those of the
