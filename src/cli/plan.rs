@@ -4,7 +4,7 @@
 
 use super::{EnvironmentArgs, SceneArgs};
 use crate::render::plan::FramePlan;
-use crate::render::{Settings, default_light};
+use crate::render::{CameraChoice, Settings, camera, default_light};
 use anyhow::Result;
 use clap::Args;
 
@@ -17,6 +17,10 @@ pub struct PlanArgs {
     json: bool,
     #[command(flatten)]
     environment: EnvironmentArgs,
+    /// Scene camera by name or index (default: the first camera, or a framing camera): the
+    /// default light is not given to a camera in a closed room.
+    #[arg(long)]
+    camera: Option<CameraChoice>,
 }
 
 pub fn run(a: &PlanArgs) -> Result<()> {
@@ -24,7 +28,8 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     let defaults = Settings::default();
     let plan =
         FramePlan::for_scene(&scene, defaults.reflections.roughness_cutoff, defaults.light_grid, defaults.mesh_lights);
-    let lighting = default_light::choose(&a.environment.environment(), &scene);
+    let start = camera::start_position(&scene, &a.camera.clone().unwrap_or_default())?;
+    let lighting = default_light::choose(&a.environment.environment(), &scene, start);
     if a.json {
         #[derive(serde::Serialize)]
         struct Out<'a> {

@@ -112,6 +112,12 @@ pub fn view_at(scene: &Scene, camera: Option<usize>, pose: &Pose, aspect: f32) -
     }
 }
 
+/// Where the chosen camera stands at time 0 (what the default light is decided from).
+pub fn start_position(scene: &Scene, choice: &CameraChoice) -> Result<Vec3> {
+    // The aspect ratio moves only the framing camera, which stays outside the bounds.
+    Ok(view_at(scene, resolve(scene, choice)?, &scene.evaluate(0.0), 1.0).position)
+}
+
 /// A camera on the +Z side of the scene's bounds, seeing all of it.
 fn framing_view(scene: &Scene, pose: &Pose, aspect: f32) -> View {
     let (lo, hi) = scene.bounds(pose);

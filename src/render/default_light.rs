@@ -12,8 +12,13 @@
 //! triangle is its material's emissive factor times its emissive texture at the triangle's
 //! centroid, so an emissive texture that is black almost everywhere (a helmet's indicator
 //! lights) counts for the little it emits.
+//!
+//! A camera in a closed room gets no default light either, whatever its emitters: when no
+//! random walk from the camera leaves the scene (sky_reach.rs), a sky would light nothing the
+//! camera sees and only draw light samples away from the emitters that do. The camera is the
+//! one the frame starts with, at time 0; a viewer that flies out of the room keeps the choice.
 
-use super::sky;
+use super::{sky, sky_reach};
 use crate::scene::{Scene, TextureRef};
 use crate::world::environment::{Environment, EnvironmentData, luminance};
 use anyhow::Result;
@@ -31,9 +36,12 @@ pub struct Lighting {
     pub note: String,
 }
 
-/// Which environment `env` gives `scene`.
-pub fn choose(env: &Environment, scene: &Scene) -> Lighting {
-    let own = own_light(scene);
+/// Which environment `env` gives `scene` seen from `camera` (its position at time 0).
+pub fn choose(env: &Environment, scene: &Scene, camera: Vec3) -> Lighting {
+    let own = own_light(scene).or_else(|why| match env {
+        Environment::DefaultLight => enclosed(scene, camera, why),
+        _ => Err(why),
+    });
     let note = match (env, &own) {
         (Environment::DefaultLight, Err(why)) => {
             format!("default light: a daylight sky with a sun, because {why} (--no-default-light turns it off)")
@@ -48,9 +56,9 @@ pub fn choose(env: &Environment, scene: &Scene) -> Lighting {
     Lighting { default_light: *env == Environment::DefaultLight && own.is_err(), note }
 }
 
-/// The environment `env` gives `scene`, ready for upload, and why.
-pub fn environment_data(env: &Environment, scene: &Scene) -> Result<(EnvironmentData, Lighting)> {
-    let lighting = choose(env, scene);
+/// The environment `env` gives `scene` seen from `camera`, ready for upload, and why.
+pub fn environment_data(env: &Environment, scene: &Scene, camera: Vec3) -> Result<(EnvironmentData, Lighting)> {
+    let lighting = choose(env, scene, camera);
     let data = if lighting.default_light { sky::daylight() } else { EnvironmentData::load(env)? };
     Ok((data, lighting))
 }
@@ -71,6 +79,21 @@ fn own_light(scene: &Scene) -> Result<String, String> {
         Err(format!(
             "the scene has no punctual lights and its emitters are too weak to light it ({what}, under {SIGNIFICANT_EMISSION})"
         ))
+    }
+}
+
+/// For a scene without its own light (`why`): Ok(why no default light) when no light from
+/// outside reaches `camera`, Err(why) otherwise.
+fn enclosed(scene: &Scene, camera: Vec3, why: String) -> Result<String, String> {
+    match sky_reach::from_camera(scene, &scene.evaluate(0.0), camera) {
+        sky_reach::Reach::Walks { escaped: 0, paths } => Ok(format!(
+            "{why}, but the camera is in a closed room (none of {paths} random walks of up to {} bounces from it leaves the scene)",
+            sky_reach::BOUNCES
+        )),
+        sky_reach::Reach::Walks { escaped, paths } => Err(format!(
+            "{why}, and light from outside reaches the camera ({escaped} of {paths} random walks from it leave the scene)"
+        )),
+        sky_reach::Reach::Outside => Err(why),
     }
 }
 
@@ -127,6 +150,9 @@ mod tests {
     use crate::scene::{Image, Instance, Material, Node, Texture, builtin};
     use glam::{Mat3, Quat};
 
+    /// A camera far outside every test scene.
+    const OUTSIDE: Vec3 = Vec3::splat(100.0);
+
     /// A 2 x 2 floor (area 4) and a 1 x 1 emissive quad (area 1) of radiance `emission`.
     fn lamp_scene(emission: f32) -> Scene {
         let mut s = Scene::default();
@@ -159,16 +185,16 @@ mod tests {
 
     #[test]
     fn weak_emitters_get_the_default_light_and_strong_ones_do_not() {
-        let weak = choose(&Environment::DefaultLight, &lamp_scene(0.2));
+        let weak = choose(&Environment::DefaultLight, &lamp_scene(0.2), OUTSIDE);
         assert!(weak.default_light && weak.note.contains("too weak"), "{weak:?}");
-        let strong = choose(&Environment::DefaultLight, &lamp_scene(1.0));
+        let strong = choose(&Environment::DefaultLight, &lamp_scene(1.0), OUTSIDE);
         assert!(!strong.default_light && strong.note.contains("emitters light it"), "{strong:?}");
-        let none = choose(&Environment::DefaultLight, &lamp_scene(0.0));
+        let none = choose(&Environment::DefaultLight, &lamp_scene(0.0), OUTSIDE);
         assert!(none.default_light && none.note.contains("no emitters"), "{none:?}");
         // Asked-for environments replace it; a black one turns it off and says so.
-        let off = choose(&Environment::Constant(Vec3::ZERO), &lamp_scene(0.0));
+        let off = choose(&Environment::Constant(Vec3::ZERO), &lamp_scene(0.0), OUTSIDE);
         assert!(!off.default_light && off.note.contains("default light is off"), "{off:?}");
-        assert!(!choose(&Environment::Constant(Vec3::ONE), &lamp_scene(0.0)).default_light);
+        assert!(!choose(&Environment::Constant(Vec3::ONE), &lamp_scene(0.0), OUTSIDE).default_light);
     }
 
     #[test]
@@ -193,8 +219,25 @@ mod tests {
     fn the_builtin_scenes_keep_their_own_lights() {
         for name in [builtin::NAMES, crate::scene::builtin_stability::NAMES].concat() {
             let scene = builtin::by_name(name).unwrap();
-            let l = choose(&Environment::DefaultLight, &scene);
+            let l = choose(&Environment::DefaultLight, &scene, OUTSIDE);
             assert!(!l.default_light, "{name}: {}", l.note);
         }
+    }
+
+    #[test]
+    fn a_camera_in_a_closed_room_gets_no_default_light_from_outside_it_does() {
+        // The lamp scene's weak lamp inside a closed 4 x 4 x 4 box around it.
+        let mut s = lamp_scene(0.2);
+        s.meshes.push(builtin::cuboid(Vec3::splat(2.0), 0));
+        s.instances.push(Instance { mesh: 2, node: 0 });
+        let inside = choose(&Environment::DefaultLight, &s, Vec3::new(0.3, 0.5, -0.2));
+        assert!(!inside.default_light && inside.note.contains("closed room"), "{inside:?}");
+        let outside = choose(&Environment::DefaultLight, &s, OUTSIDE);
+        assert!(outside.default_light && outside.note.contains("too weak"), "{outside:?}");
+        // A hole in the box lets the sky in.
+        let faces = &mut s.meshes[2].indices;
+        faces.truncate(faces.len() - 6);
+        let open = choose(&Environment::DefaultLight, &s, Vec3::new(0.3, 0.5, -0.2));
+        assert!(open.default_light && open.note.contains("random walks from it leave"), "{open:?}");
     }
 }

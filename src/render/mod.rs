@@ -7,6 +7,7 @@ pub mod frame;
 pub mod plan;
 pub mod ray_batch;
 pub mod sky;
+pub mod sky_reach;
 
 pub use camera::{CameraChoice, View};
 // The environment setting belongs with the renderer's settings; the data it loads lives in
@@ -202,7 +203,8 @@ impl Renderer {
     ) -> Result<Self> {
         crate::accel::sort_triangles_spatially(&mut scene);
         // Decided on the scene as loaded: lights the plan culls below are still its own.
-        let (environment, lighting) = default_light::environment_data(&settings.environment, &scene)?;
+        let start = camera::start_position(&scene, camera)?;
+        let (environment, lighting) = default_light::environment_data(&settings.environment, &scene, start)?;
         log::info!("lighting of {}: {}", scene.name, lighting.note);
         let glass = scene.materials.iter().filter(|m| m.is_transmissive()).count();
         if glass > 0 && !matches!(settings.mode, RenderMode::Reference { .. }) {

@@ -112,7 +112,8 @@ pub fn pick_for_render(
     device: &str,
     goal: Target,
 ) -> Result<(Config, String)> {
-    let lit = default_light::choose(environment, scene).default_light;
+    let start = crate::render::camera::start_position(scene, camera)?;
+    let lit = default_light::choose(environment, scene, start).default_light;
     let hash = lit_scene_key(scene_hash(spec)?, lit);
     let cam = camera_key(camera);
     let path = sweep_cache_path(cache_dir, &hash, &cam, size, backend, device);
@@ -120,7 +121,7 @@ pub fn pick_for_render(
         let (w, h) = size;
         let mut camera_arg =
             if matches!(camera, CameraChoice::Default) { String::new() } else { format!(" --camera {cam}") };
-        if !lit && default_light::choose(&Environment::DefaultLight, scene).default_light {
+        if !lit && default_light::choose(&Environment::DefaultLight, scene, start).default_light {
             camera_arg += " --no-default-light";
         }
         let mut msg = format!(

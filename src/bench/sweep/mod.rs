@@ -494,7 +494,9 @@ pub fn sweep_scene(
         );
     }
     let start = Instant::now();
-    let hash = lit_scene_key(scene_hash(spec)?, default_light::choose(&opts.environment, scene).default_light);
+    let camera = crate::render::camera::start_position(scene, &opts.camera)?;
+    let lit = default_light::choose(&opts.environment, scene, camera).default_light;
+    let hash = lit_scene_key(scene_hash(spec)?, lit);
     let (reference, reference_info) = reference(ctx, shaders, spec, scene, backend, opts, &hash)?;
     let rounds = opts.rounds.max(1);
     let bar = crate::progress::progress_bar(opts.configs.len() as u64 * opts.frames as u64 * rounds as u64, "frames");
