@@ -334,6 +334,7 @@ fn a_mesh_light_gets_adaptive_soft_shadows() {
     let (whole, penumbra) = (floor(&frame, false) / floor(&truth, false), floor(&frame, true) / floor(&truth, true));
     eprintln!("panel-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
     assert!((whole - 1.0).abs() < 0.03, "the floor reads {whole} of the reference's light");
-    assert!((penumbra - 1.0).abs() < 0.06, "the penumbra reads {penumbra} of the reference's light");
+    // 0.961 while every 3x3 block took the same points of the light (shadows.comp block_shift).
+    assert!((penumbra - 1.0).abs() < 0.03, "the penumbra reads {penumbra} of the reference's light");
     common::assert_validation_clean(ctx);
 }

@@ -1,6 +1,6 @@
 // Mesh lights: small emissive meshes that take the shadows chain's channels the punctual
 // lights leave free (world::lights::chain_emitters; one material, no emissive texture, at most
-// 8 triangles). As for a sphere light (Ray Tracing Gems ch. 13), the chain's adaptive shadow
+// MESH_LIGHT_MAX_TRIANGLES triangles). As for a sphere light (Ray Tracing Gems ch. 13), the chain's adaptive shadow
 // rays give the share of the light that arrives, to points drawn on the mesh by area, and
 // composite multiplies it into the unshadowed light, which for a polygon of uniform radiance
 // has a closed form: the irradiance is Le times the polygon's vector form factor projected on
@@ -11,24 +11,8 @@
 
 #include "light_sampling.glsl"
 
-// A point drawn with `u` uniformly by area on the mesh light of `count` emitters from `first`,
-// seen from `origin`: its direction, distance and geometry term (the emitter's cosine over the
-// squared distance); 0 where that point's side does not emit toward `origin`.
-float mesh_light_point(uint first, uint count, vec3 origin, vec2 u, out vec3 dir, out float dist) {
-    float total = 0.0;
-    for (uint t = 0u; t < count; ++t) total += emitters[first + t].area;
-    // The triangle whose stretch of the area holds u.x, and u.x rescaled within it, so that
-    // the low-discrepancy points stay well spread over the whole mesh.
-    float x = u.x * total;
-    uint t = 0u;
-    for (; t + 1u < count && x >= emitters[first + t].area; ++t) x -= emitters[first + t].area;
-    u.x = clamp(x / max(emitters[first + t].area, 1e-30), 0.0, 0.99999994);
-    vec2 bary;
-    NeeSample s = emitter_point(emitters[first + t], origin, u, bary);
-    dir = s.dir;
-    dist = s.dist;
-    return s.weight.x / emitters[first + t].area;
-}
+// The most triangles a mesh light has. Rust: world::lights::MAX_CHAIN_EMITTER_TRIANGLES.
+#define MESH_LIGHT_MAX_TRIANGLES 8u
 
 // The solid-angle-weighted direction integral of a spherical polygon's edge from a to b (seen
 // from the origin): theta times the unit normal of the great circle through them.
@@ -66,19 +50,64 @@ vec3 triangle_form_factor(vec3 n, vec3 a, vec3 b, vec3 c) {
     return dot(f, n) < 0.0 ? -f : f;
 }
 
+// Emitter triangle e's vector form factor at point p for normal n: int w cos dw over what of
+// its emitting side lies above the surface (zero where that side faces away from p).
+vec3 emitter_form_factor(Emitter e, vec3 p, vec3 n) {
+    vec3 a = e.p0 - p;
+    if ((e.flags & EMITTER_DOUBLE_SIDED) == 0u && dot(e.normal, a) >= 0.0) return vec3(0.0);
+    return triangle_form_factor(n, a, a + e.e1, a + e.e2);
+}
+
 // The mesh light's vector form factor at point p for normal n: int w cos dw over what of its
 // emitting sides lies above the surface. Its projection on n times the emission is the
 // irradiance; its direction is where the light arrives from on average.
 vec3 mesh_light_form_factor(uint first, uint count, vec3 p, vec3 n) {
     vec3 f = vec3(0.0);
-    for (uint t = 0u; t < count; ++t) {
-        Emitter e = emitters[first + t];
-        vec3 a = e.p0 - p;
-        // One-sided: a point behind the emitting side gets nothing.
-        if ((e.flags & EMITTER_DOUBLE_SIDED) == 0u && dot(e.normal, a) >= 0.0) continue;
-        f += triangle_form_factor(n, a, a + e.e1, a + e.e2);
-    }
+    for (uint t = 0u; t < count; ++t) f += emitter_form_factor(emitters[first + t], p, n);
     return f;
+}
+
+// The share of the mesh light's unshadowed irradiance at `origin` (normal `ng`) that each of its
+// triangles sends, from their form factors; false when none sends any.
+bool mesh_light_shares(uint first, uint count, vec3 origin, vec3 ng, out float share[MESH_LIGHT_MAX_TRIANGLES]) {
+    float total = 0.0;
+    for (uint t = 0u; t < MESH_LIGHT_MAX_TRIANGLES; ++t) {
+        share[t] = t < count ? max(dot(ng, emitter_form_factor(emitters[first + t], origin, ng)), 0.0) : 0.0;
+        total += share[t];
+    }
+    if (!(total > 0.0)) return false;
+    for (uint t = 0u; t < MESH_LIGHT_MAX_TRIANGLES; ++t) share[t] /= total;
+    return true;
+}
+
+// A point of the mesh light for a shadow ray from `origin` (normal `ng`): a triangle drawn by its
+// `share` of the light, a point on it uniformly by area with `u`. Returns the point's direction
+// and distance, and its weight in the ratio of shadowed to unshadowed light: what it brings
+// (both cosines over the squared distance) over the density it was drawn with, relative to the
+// light (0 below the surface or behind the emitting side). Drawn by area over the whole mesh,
+// the points of a closed light that emits on both sides mostly fell on its far side, hidden by
+// its near one, and a pixel's few points said far less light arrived than does (the nvpro
+// Cornell box's light).
+float mesh_light_point(uint first, uint count, vec3 origin, vec3 ng, float share[MESH_LIGHT_MAX_TRIANGLES], vec2 u,
+                       out vec3 dir, out float dist) {
+    // The triangle whose stretch of the shares holds u.x, and u.x rescaled within it, so that
+    // the low-discrepancy points stay well spread.
+    uint t = 0u;
+    float x = u.x;
+    for (; t + 1u < count && x >= share[t]; ++t) x -= share[t];
+    dir = vec3(0.0, 0.0, 1.0);
+    dist = 0.0;
+    // Rounding can leave u.x past the last triangle that sends light.
+    if (!(share[t] > 0.0)) return 0.0;
+    u.x = clamp(x / share[t], 0.0, 0.99999994);
+    Emitter e = emitters[first + t];
+    vec2 bary;
+    NeeSample s = emitter_point(e, origin, u, bary);
+    dir = s.dir;
+    dist = s.dist;
+    // s.weight is the emitter's cosine over the squared distance times the area, so this is
+    // f / (share / area) up to the light's total, which cancels in the ratio.
+    return s.weight.x * max(dot(s.dir, ng), 0.0) / share[t];
 }
 
 // The mesh light's radiance (one material, no texture: its emissive factor).

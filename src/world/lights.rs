@@ -53,7 +53,8 @@ pub const EMITTER_DOUBLE_SIDED: u32 = 1;
 /// common/light_sampling.glsl.
 pub const EMITTER_IN_CHAIN: u32 = 2;
 /// The most triangles a mesh light of the shadows chain may have: composite integrates each
-/// one's unshadowed light in closed form, per pixel.
+/// one's unshadowed light in closed form, per pixel, and the shadows pass keeps each one's share
+/// of it. Mirrors MESH_LIGHT_MAX_TRIANGLES in common/mesh_lights.glsl.
 pub const MAX_CHAIN_EMITTER_TRIANGLES: usize = 8;
 /// Bytes before the emitters' groups at binding 22: their count, padded.
 const EMITTER_GROUPS_HEADER: usize = 16;
@@ -608,6 +609,13 @@ mod tests {
         // Mirrored in x, the winding turns over, but the quad still faces +Z.
         assert!(Vec3::from(e[0].normal).abs_diff_eq(Vec3::Z, 1e-6), "{:?}", e[0].normal);
         assert_eq!(e[0].flags, EMITTER_DOUBLE_SIDED | EMITTER_IN_CHAIN);
+    }
+
+    #[test]
+    fn the_shaders_hold_as_many_mesh_light_triangles_as_the_selection_allows() {
+        let glsl = include_str!("../../shaders-glsl/common/mesh_lights.glsl");
+        let define = format!("#define MESH_LIGHT_MAX_TRIANGLES {MAX_CHAIN_EMITTER_TRIANGLES}u");
+        assert!(glsl.contains(&define), "common/mesh_lights.glsl must say {define}");
     }
 
     #[test]
