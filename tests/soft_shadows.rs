@@ -6,7 +6,8 @@
 //! - a hard light (builtin:shadow-test) stays at one ray and is not filtered: the frame plan
 //!   leaves the filter passes out, and with `--full` they pass its visibility through;
 //! - a mesh light (an emissive panel in place of the sphere) gets the same: visibility,
-//!   adaptive counts, and a lit floor that matches the reference path tracer's.
+//!   adaptive counts, and a lit floor that matches the reference path tracer's; so does a
+//!   closed one (an octahedron), whose shadow rays go only to the faces that face the floor.
 
 mod common;
 
@@ -73,21 +74,66 @@ const PANEL_RADIANCE: f32 = 12.0;
 /// (two triangles, one-sided): no punctual light, so the panel takes the shadows chain's first
 /// channel as a mesh light. Nothing lights the scene from outside.
 fn panel_shadow_test() -> Scene {
+    emitter_shadow_test("panel", |material| {
+        builtin::quad(Vec3::ZERO, Vec3::X * PANEL_SIDE, Vec3::Z * PANEL_SIDE, material)
+    })
+}
+
+/// soft_shadow_test with the sphere light replaced by a one-sided emissive octahedron of the
+/// sphere's radius (8 triangles facing out): from any floor point, at most half of its faces
+/// emit toward it.
+fn octahedron_shadow_test() -> Scene {
+    emitter_shadow_test("octahedron", |material| {
+        let r = facts::SPHERE_RADIUS;
+        let corners = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|c| c * r);
+        let vertices = corners
+            .iter()
+            .map(|&c| hybrid_rt::scene::Vertex {
+                position: c.into(),
+                normal: c.normalize().into(),
+                ..Default::default()
+            })
+            .collect();
+        let mut indices = Vec::new();
+        for x in [0u32, 1] {
+            for y in [2u32, 3] {
+                for z in [4u32, 5] {
+                    // Counter-clockwise seen from outside: (x, y, z) is right-handed when an
+                    // even number of the three corners is negative.
+                    let flips = (x == 1) as u32 + (y == 3) as u32 + (z == 5) as u32;
+                    indices.extend_from_slice(&if flips & 1 == 0 { [x, y, z] } else { [x, z, y] });
+                }
+            }
+        }
+        hybrid_rt::scene::Mesh {
+            name: "octahedron".into(),
+            vertices,
+            indices,
+            material,
+            bounds_min: Vec3::splat(-r),
+            bounds_max: Vec3::splat(r),
+        }
+    })
+}
+
+/// soft_shadow_test with its sphere light replaced by the emissive mesh `mesh(material)`,
+/// centred where the sphere was, of radiance PANEL_RADIANCE and black otherwise.
+fn emitter_shadow_test(name: &str, mesh: impl FnOnce(u32) -> hybrid_rt::scene::Mesh) -> Scene {
     let mut s = builtin::shadow_test();
-    s.name = "panel-shadow-test".into();
+    s.name = format!("{name}-shadow-test");
     s.lights.clear();
     let material = s.materials.len() as u32;
     s.materials.push(Material {
-        name: "panel".into(),
+        name: name.into(),
         base_color_factor: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
         emissive_factor: Vec3::splat(PANEL_RADIANCE),
         ..Material::default()
     });
-    let mesh = s.meshes.len() as u32;
-    s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X * PANEL_SIDE, Vec3::Z * PANEL_SIDE, material));
+    let mesh = mesh(material);
+    s.meshes.push(mesh);
     let node = s.nodes.len() as u32;
-    s.nodes.push(common::node("panel", facts::SPHERE_LIGHT));
-    s.instances.push(Instance { mesh, node });
+    s.nodes.push(common::node(name, facts::SPHERE_LIGHT));
+    s.instances.push(Instance { mesh: s.meshes.len() as u32 - 1, node });
     s
 }
 
@@ -288,6 +334,57 @@ fn hard_lights_use_one_ray_and_no_filter() {
     common::assert_validation_clean(ctx);
 }
 
+/// The mean luminance of the floor points in `r`'s frame over a `base`-sized reference of
+/// `scene` (256 spp), over the whole floor and over its penumbra, where `truth` is strictly
+/// between 0.1 and 0.9.
+fn lit_floor_against_reference(
+    ctx: &std::sync::Arc<hybrid_rt::gpu::Context>,
+    mut r: Renderer,
+    scene: Scene,
+    base: Settings,
+    points: &[(u32, u32, Vec3)],
+    truth: fn(Vec3) -> f32,
+) -> (f64, f64) {
+    let floor = |img: &CpuImage, penumbra: bool| {
+        let (mut sum, mut count) = (0.0f64, 0);
+        for &(x, y, p) in points {
+            let t = truth(p);
+            if penumbra && !(t > 0.1 && t < 0.9) {
+                continue;
+            }
+            sum += (0.2126 * img.get(x, y, 0) + 0.7152 * img.get(x, y, 1) + 0.0722 * img.get(x, y, 2)) as f64;
+            count += 1;
+        }
+        sum / count as f64
+    };
+    let frame = r.read_output(r.hdr_output()).unwrap();
+    drop(r);
+    let reference_settings = Settings { mode: RenderMode::Reference { seed: 3, max_bounces: 8 }, ..base };
+    let mut reference = renderer_with(ctx, scene, reference_settings);
+    common::render_frames(&mut reference, 256);
+    let reference = reference.read_output(reference.hdr_output()).unwrap();
+    (floor(&frame, false) / floor(&reference, false), floor(&frame, true) / floor(&reference, true))
+}
+
+#[test]
+fn a_closed_mesh_light_is_sampled_where_it_faces() {
+    let ctx = common::validated_context();
+    let base = Settings { environment: Environment::default(), ..Default::default() };
+    let mut r = renderer_with(&ctx, octahedron_shadow_test(), base.clone());
+    assert_eq!(r.shadow_visibility(), VISIBILITY, "the octahedron is a mesh light");
+    common::render_frames(&mut r, 26);
+    let ids = r.read_output(passes::gbuffer::IDS).unwrap();
+    let points = floor_points(&r, &ids);
+    let (whole, penumbra) =
+        lit_floor_against_reference(&ctx, r, octahedron_shadow_test(), base, &points, true_visibility);
+    eprintln!("octahedron-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
+    assert!((whole - 1.0).abs() < 0.03, "the floor reads {whole} of the reference's light");
+    // The sphere's penumbra, which the octahedron's nearly shares: 0.913 when the shadow rays'
+    // points were drawn by area over all eight faces, 1.033 by each face's share of the light.
+    assert!((penumbra - 1.0).abs() < 0.05, "the penumbra reads {penumbra} of the reference's light");
+    common::assert_validation_clean(ctx);
+}
+
 #[test]
 fn a_mesh_light_gets_adaptive_soft_shadows() {
     let ctx = common::validated_context();
@@ -312,26 +409,8 @@ fn a_mesh_light_gets_adaptive_soft_shadows() {
     // The lit floor: the frame against the path tracer, over the whole floor and over the
     // penumbra (composite's closed-form light times the chain's visibility, and gi leaving the
     // panel out of its reservoirs: counted twice, the floor would read twice as bright).
-    let floor = |img: &CpuImage, penumbra: bool| {
-        let (mut sum, mut count) = (0.0f64, 0);
-        for &(x, y, p) in &points {
-            let truth = true_panel_visibility(p);
-            if penumbra && !(truth > 0.1 && truth < 0.9) {
-                continue;
-            }
-            sum += (0.2126 * img.get(x, y, 0) + 0.7152 * img.get(x, y, 1) + 0.0722 * img.get(x, y, 2)) as f64;
-            count += 1;
-        }
-        sum / count as f64
-    };
-    let frame = r.read_output(r.hdr_output()).unwrap();
-    drop(r);
-    let reference_settings = Settings { mode: RenderMode::Reference { seed: 3, max_bounces: 8 }, ..base };
-    let mut reference = renderer_with(&ctx, panel_shadow_test(), reference_settings);
-    common::render_frames(&mut reference, 256);
-    let truth = reference.read_output(reference.hdr_output()).unwrap();
-    drop(reference);
-    let (whole, penumbra) = (floor(&frame, false) / floor(&truth, false), floor(&frame, true) / floor(&truth, true));
+    let (whole, penumbra) =
+        lit_floor_against_reference(&ctx, r, panel_shadow_test(), base, &points, true_panel_visibility);
     eprintln!("panel-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
     assert!((whole - 1.0).abs() < 0.03, "the floor reads {whole} of the reference's light");
     // 0.961 while every 3x3 block took the same points of the light (shadows.comp block_shift).
