@@ -366,6 +366,14 @@ fn lit_floor_against_reference(
     (floor(&frame, false) / floor(&reference, false), floor(&frame, true) / floor(&reference, true))
 }
 
+/// The floor lit by `light` within 3% of the reference's light, its penumbra within
+/// `penumbra_bound`.
+fn assert_lit_floor(light: &str, (whole, penumbra): (f64, f64), penumbra_bound: f64) {
+    eprintln!("{light}-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
+    assert!((whole - 1.0).abs() < 0.03, "{light}: the floor reads {whole} of the reference's light");
+    assert!((penumbra - 1.0).abs() < penumbra_bound, "{light}: the penumbra reads {penumbra} of the reference's light");
+}
+
 #[test]
 fn a_closed_mesh_light_is_sampled_where_it_faces() {
     let ctx = common::validated_context();
@@ -375,13 +383,10 @@ fn a_closed_mesh_light_is_sampled_where_it_faces() {
     common::render_frames(&mut r, 26);
     let ids = r.read_output(passes::gbuffer::IDS).unwrap();
     let points = floor_points(&r, &ids);
-    let (whole, penumbra) =
-        lit_floor_against_reference(&ctx, r, octahedron_shadow_test(), base, &points, true_visibility);
-    eprintln!("octahedron-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
-    assert!((whole - 1.0).abs() < 0.03, "the floor reads {whole} of the reference's light");
+    let lit = lit_floor_against_reference(&ctx, r, octahedron_shadow_test(), base, &points, true_visibility);
     // The sphere's penumbra, which the octahedron's nearly shares: 0.913 when the shadow rays'
     // points were drawn by area over all eight faces, 1.033 by each face's share of the light.
-    assert!((penumbra - 1.0).abs() < 0.05, "the penumbra reads {penumbra} of the reference's light");
+    assert_lit_floor("octahedron", lit, 0.05);
     common::assert_validation_clean(ctx);
 }
 
@@ -409,11 +414,9 @@ fn a_mesh_light_gets_adaptive_soft_shadows() {
     // The lit floor: the frame against the path tracer, over the whole floor and over the
     // penumbra (composite's closed-form light times the chain's visibility, and gi leaving the
     // panel out of its reservoirs: counted twice, the floor would read twice as bright).
-    let (whole, penumbra) =
-        lit_floor_against_reference(&ctx, r, panel_shadow_test(), base, &points, true_panel_visibility);
-    eprintln!("panel-lit floor against the reference (256 spp): whole {whole:.4}, penumbra {penumbra:.4}");
-    assert!((whole - 1.0).abs() < 0.03, "the floor reads {whole} of the reference's light");
-    // 0.961 while every 3x3 block took the same points of the light (shadows.comp block_shift).
-    assert!((penumbra - 1.0).abs() < 0.03, "the penumbra reads {penumbra} of the reference's light");
+    let lit = lit_floor_against_reference(&ctx, r, panel_shadow_test(), base, &points, true_panel_visibility);
+    // The penumbra read 0.961 while every 3x3 block took the same points of the light
+    // (shadows.comp block_shift).
+    assert_lit_floor("panel", lit, 0.03);
     common::assert_validation_clean(ctx);
 }

@@ -147,8 +147,8 @@ fn emissive_texel(scene: &Scene, t: TextureRef, uv: Vec2) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Image, Instance, Material, Node, Texture, builtin};
-    use glam::{Mat3, Quat};
+    use crate::scene::{Image, Instance, Material, Texture, builtin};
+    use glam::Mat3;
 
     /// A camera far outside every test scene.
     const OUTSIDE: Vec3 = Vec3::splat(100.0);
@@ -164,13 +164,7 @@ mod tests {
         });
         s.meshes.push(builtin::quad(Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0, 0));
         s.meshes.push(builtin::quad(Vec3::Y, Vec3::X, Vec3::Z, 1));
-        s.nodes.push(Node {
-            name: "n".into(),
-            parent: None,
-            translation: Vec3::ZERO,
-            rotation: Quat::IDENTITY,
-            scale: Vec3::ONE,
-        });
+        s.nodes.push(builtin::node("n", Vec3::ZERO));
         s.instances.push(Instance { mesh: 0, node: 0 });
         s.instances.push(Instance { mesh: 1, node: 0 });
         s

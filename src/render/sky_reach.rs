@@ -109,8 +109,7 @@ fn cosine_around(n: Vec3, u: f32, v: f32) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Instance, Material, Node, builtin};
-    use glam::Quat;
+    use crate::scene::{Instance, Material, builtin};
 
     /// A 2 x 2 x 2 room of six walls around the origin; `open` leaves the +X wall out and
     /// `glass` makes it transmissive.
@@ -132,13 +131,7 @@ mod tests {
                 s.instances.push(Instance { mesh: s.meshes.len() as u32 - 1, node: 0 });
             }
         }
-        s.nodes.push(Node {
-            name: "n".into(),
-            parent: None,
-            translation: Vec3::ZERO,
-            rotation: Quat::IDENTITY,
-            scale: Vec3::ONE,
-        });
+        s.nodes.push(builtin::node("n", Vec3::ZERO));
         s
     }
 

@@ -380,7 +380,8 @@ pub fn checker_test() -> Scene {
     s
 }
 
-pub(super) fn node(name: &str, t: Vec3) -> Node {
+/// A root node at `t`, unrotated and unscaled.
+pub(crate) fn node(name: &str, t: Vec3) -> Node {
     Node { name: name.into(), parent: None, translation: t, rotation: Quat::IDENTITY, scale: Vec3::ONE }
 }
 
