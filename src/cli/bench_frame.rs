@@ -37,6 +37,11 @@ pub struct FrameArgs {
     /// Replace an existing output file.
     #[arg(long)]
     force: bool,
+    /// Compile shaders from this shaders-glsl folder at start-up instead of the embedded ones
+    /// (needs a build with `--features shader-compiler`): what a shader change costs, pass by
+    /// pass, without rebuilding.
+    #[arg(long)]
+    shader_dir: Option<PathBuf>,
 }
 
 pub fn run(a: &FrameArgs) -> Result<()> {
@@ -47,7 +52,10 @@ pub fn run(a: &FrameArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
-    let shaders = ShaderLibrary::embedded();
+    let shaders = match &a.shader_dir {
+        Some(dir) => ShaderLibrary::from_dir(dir)?,
+        None => ShaderLibrary::embedded(),
+    };
     let bar = crate::progress::progress_bar(sizes.len() as u64, "sizes");
     let mut costs = Vec::new();
     for &size in &sizes {

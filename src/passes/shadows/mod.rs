@@ -38,7 +38,10 @@ pub const MAX_SHADOWED_LIGHTS: usize = crate::world::lights::SHADOWED_LIGHTS;
 /// The named settings of the adaptive shadows.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct ShadowSettings {
-    /// Most rays per pixel and area light: 5 standard, 8 high (the chapter's tiers).
+    /// Most rays per pixel and area light. The chapter's tiers are 5 (standard) and 8 (high);
+    /// the default is 3: the 4-frame ring, the filter and SVGF leave the same error after 64
+    /// frames at 5 and at 3 (HDR-FLIP 0.1084 on the default scene, `bench sweep
+    /// --configs d4-s5-b1-r1,d4-s3-b1-r1`), and 3 took 6-10% off its frame in two runs.
     pub s_max: u32,
     /// Penumbra threshold on dv_bar: above it the count grows, below it (after 4 stable frames)
     /// it shrinks.
@@ -55,7 +58,7 @@ pub struct ShadowSettings {
 
 impl Default for ShadowSettings {
     fn default() -> Self {
-        Self { s_max: 5, delta: 0.02, eta: 0.4, budget_fraction: 0.25, forced_blocks: true }
+        Self { s_max: 3, delta: 0.02, eta: 0.4, budget_fraction: 0.25, forced_blocks: true }
     }
 }
 
