@@ -155,8 +155,9 @@ uint emitter_pick(float u, float share, out float pmf) {
 // An emissive triangle's entry for u in [0, 1), and the probability of choosing it among
 // them: from the shading point's cell of the light grid by what it sees of each group of them
 // (`in_cell`, `cell`: light_grid_emitter_cell; light_grid_emitter_pick), else (outside the
-// grid, before anything was built, or with all emitters in one group, where that choice is
-// the same) by power.
+// grid, or before anything was built) by power. The groups leave the shadows chain's mesh
+// lights out (their candidates weigh nothing here), the light table does not: so a single
+// group is drawn from too.
 uint emitter_pick_at(bool in_cell, uint cell, float u, float share, out float pmf) {
     if (in_cell) {
         uint e = light_grid_emitter_pick(cell, u, pmf);
@@ -176,7 +177,7 @@ LightReservoir reservoir_candidates(ShadingPoint sp, inout Rng rng) {
     // (0 without emitters, which keeps the punctual lights' draws as they were).
     float p_emitter = emitters / (emitters + (lights_here.hi - lights_here.lo));
     uint emitter_cell;
-    bool in_cell = emitter_group_count > 1u && light_grid_emitter_cell(sp.origin, emitter_cell);
+    bool in_cell = light_grid_emitter_cell(sp.origin, emitter_cell);
     // Not unrolled: each copy of the body would lengthen a CPU driver's compile.
     [[dont_unroll]] for (uint k = 0u; k < RIS_CANDIDATES; ++k) {
         vec3 u = rng_next3(rng);

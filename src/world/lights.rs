@@ -131,8 +131,9 @@ pub struct LightTables {
     /// The emissive triangles by the grid's groups (`light_grid::emitter_groups`); rewritten
     /// when emitters move or the grid's cells do.
     emitter_groups: StagedBuffer,
-    /// Each emissive triangle's centroid and power, as last built.
-    emitter_points: Vec<(Vec3, f32)>,
+    /// What the grid's emitter groups are built from: each emissive triangle's centroid and
+    /// power as last built, a mesh light of the shadows chain's with power 0 (see `update`).
+    group_points: Vec<(Vec3, f32)>,
     /// Whether the next `record` resets the visibility.
     visibility_reset_pending: bool,
     /// The header of the grid last written (where its cells are).
@@ -234,7 +235,7 @@ impl LightTables {
             grid_visibility,
             grid_capacity,
             emitter_groups,
-            emitter_points: Vec::new(),
+            group_points: Vec::new(),
             // The device-local buffer starts undefined.
             visibility_reset_pending: true,
             grid_header: GpuLightGridHeader::default(),
@@ -310,7 +311,7 @@ impl LightTables {
     /// Sorts the emissive triangles as last built into the groups of the grid as last written,
     /// for the next `record` to copy in.
     fn stage_emitter_groups(&mut self) -> Result<()> {
-        let (groups, entries) = light_grid::emitter_groups(&self.grid_header, &self.emitter_points);
+        let (groups, entries) = light_grid::emitter_groups(&self.grid_header, &self.group_points);
         let listed = EMITTER_GROUPS_HEADER + light_grid::EMITTER_GROUPS as usize * size_of::<GpuEmitterGroup>();
         self.emitter_groups.write(0, bytemuck::bytes_of(&[groups.len() as u32, 0, 0, 0]))?;
         self.emitter_groups.write(EMITTER_GROUPS_HEADER, bytemuck::cast_slice(&groups))?;
@@ -369,8 +370,9 @@ impl LightTables {
         let emitters = emitters(scene, pose, &self.chain);
         let mut powers: Vec<(u32, u32, f32)> = Vec::with_capacity(self.punctual_powers.len() + emitters.len() + 1);
         powers.extend(self.punctual_powers.iter().enumerate().map(|(i, &p)| (LIGHT_KIND_PUNCTUAL, i as u32, p)));
-        self.emitter_points = emitters.iter().map(|e| (centroid(e), emitter_power(scene, e))).collect();
-        powers.extend(self.emitter_points.iter().enumerate().map(|(i, e)| (LIGHT_KIND_EMITTER, i as u32, e.1)));
+        powers
+            .extend(emitters.iter().enumerate().map(|(i, e)| (LIGHT_KIND_EMITTER, i as u32, emitter_power(scene, e))));
+        self.group_points = group_points(scene, &emitters);
         powers.push((LIGHT_KIND_ENVIRONMENT, 0, self.env_power));
         let entries = light_cdf(&powers);
         let (env_width, env_height, env_constant) = self.env_header;
@@ -491,6 +493,19 @@ pub fn emitters(scene: &Scene, pose: &Pose, chain: &[u32]) -> Vec<GpuEmitter> {
 fn build_grid(lights: &[GpuLight], powers: &[f32], bounds: (Vec3, Vec3), capacity: usize, emitters: bool) -> LightGrid {
     let grid = LightGrid::build_within(lights, powers, SHADOWED_LIGHTS, bounds, light_grid::RESOLUTION, capacity);
     if grid.header.cell_count == 0 && emitters { LightGrid::cells_only(bounds, light_grid::RESOLUTION) } else { grid }
+}
+
+/// What the grid's emitter groups are built from: each emitter's centroid and power, the
+/// shadows chain's mesh lights' power 0. gi draws its reservoirs' emitter candidates from the
+/// groups, and such a candidate weighs nothing there (composite shades those lights): every
+/// draw of one was wasted, most of them where the chain holds the brightest lights
+/// (builtin:many-panels' camera room). The light table keeps them: path vertices' light
+/// samples need them.
+fn group_points(scene: &Scene, emitters: &[GpuEmitter]) -> Vec<(Vec3, f32)> {
+    emitters
+        .iter()
+        .map(|e| (centroid(e), if e.flags & EMITTER_IN_CHAIN != 0 { 0.0 } else { emitter_power(scene, e) }))
+        .collect()
 }
 
 fn centroid(e: &GpuEmitter) -> Vec3 {
@@ -648,6 +663,14 @@ mod tests {
             .map(|e| e.instance)
             .collect();
         assert_eq!(flagged, vec![1, 1, 2, 2]);
+        // The grid's groups draw only the others: the chain's triangles have no power there,
+        // the textured quad and the sphere theirs as in the light table.
+        let e = emitters(&s, &s.evaluate(0.0), &chain);
+        for (em, (_, power)) in e.iter().zip(group_points(&s, &e)) {
+            let expected = if em.flags & EMITTER_IN_CHAIN != 0 { 0.0 } else { emitter_power(&s, em) };
+            assert_eq!(power, expected, "instance {}", em.instance);
+            assert!(emitter_power(&s, em) > 0.0);
+        }
     }
 
     /// The structs match light_sampling.glsl's scalar layout: 4-byte members, vec3 unpadded.
