@@ -186,10 +186,7 @@ impl Viewer {
         let window = event_loop.create_window(attributes).context("create the window")?;
         let display = window.display_handle().map_err(|e| anyhow!("window display handle: {e}"))?.as_raw();
         let handle = window.window_handle().map_err(|e| anyhow!("window handle: {e}"))?.as_raw();
-        let shaders = match &opts.shader_dir {
-            Some(dir) => ShaderLibrary::from_dir(dir)?,
-            None => ShaderLibrary::embedded(),
-        };
+        let shaders = ShaderLibrary::from_dir_or_embedded(opts.shader_dir.as_deref())?;
         let ctx =
             Context::new(&ContextOptions { validate: opts.validate, window: Some(display), ..Default::default() })?;
         let (backend, backend_why) = backend::resolve(&ctx.caps, opts.backend)?;

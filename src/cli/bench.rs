@@ -250,10 +250,7 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
     let (backend, why) = crate::backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", backend.variant());
-    let shaders = match &a.shader_dir {
-        Some(dir) => ShaderLibrary::from_dir(dir)?,
-        None => ShaderLibrary::embedded(),
-    };
+    let shaders = ShaderLibrary::from_dir_or_embedded(a.shader_dir.as_deref())?;
     let start = std::time::Instant::now();
     let mut sweeps = Vec::new();
     let mut chart = charts.iter();

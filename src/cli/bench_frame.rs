@@ -52,10 +52,7 @@ pub fn run(a: &FrameArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
-    let shaders = match &a.shader_dir {
-        Some(dir) => ShaderLibrary::from_dir(dir)?,
-        None => ShaderLibrary::embedded(),
-    };
+    let shaders = ShaderLibrary::from_dir_or_embedded(a.shader_dir.as_deref())?;
     let bar = crate::progress::progress_bar(sizes.len() as u64, "sizes");
     let mut costs = Vec::new();
     for &size in &sizes {

@@ -119,10 +119,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         bail!("--dump-frames {bad}: frames are numbered 1..={}", a.frames);
     }
     let scene = a.scene.load()?;
-    let shaders = match &a.shader_dir {
-        Some(dir) => ShaderLibrary::from_dir(dir)?,
-        None => ShaderLibrary::embedded(),
-    };
+    let shaders = ShaderLibrary::from_dir_or_embedded(a.shader_dir.as_deref())?;
     let ctx = Context::new(&ContextOptions { validate: a.gpu.validate, ..Default::default() })?;
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());

@@ -53,6 +53,11 @@ impl ShaderLibrary {
         Ok(lib)
     }
 
+    /// The modules of `dir` where a command was given `--shader-dir`, else the embedded ones.
+    pub fn from_dir_or_embedded(dir: Option<&Path>) -> Result<Self> {
+        dir.map_or_else(|| Ok(Self::embedded()), Self::from_dir)
+    }
+
     /// Recompiles all modules from the source folder. On error the previous SPIR-V is kept
     /// and the error (with file and line) returned.
     pub fn recompile(&mut self) -> Result<()> {

@@ -1,4 +1,4 @@
-//! The configurations a sweep renders: each one a short name (`d4-s5-b1-r1`) that parses to
+//! The configurations a sweep renders: each one a short name (`d4-s3-b1-r1`) that parses to
 //! and prints from the frame settings it changes.
 
 use crate::render::Settings;
@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 /// pixels each frame or all of them (against the default), and `f1` when every pass runs
 /// instead of the scene's frame plan (src/render/plan.rs): a pair differing only in `f` shows
 /// what the plan saves and costs. Settings left out of a name take the defaults
-/// (`d4-s5-b1-r1`, TAA on: the renderer's defaults, and what `hybrid-rt render` draws).
+/// (`d4-s3-b1-r1`, TAA on: the renderer's defaults, and what `hybrid-rt render` draws).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Config {
     pub denoise_iterations: u32,
@@ -143,32 +143,33 @@ impl Config {
     }
 }
 
-/// The default configurations: each axis moved away from the renderer's defaults (d4-s5-b1-r1)
+/// The default configurations: each axis moved away from the renderer's defaults (d4-s3-b1-r1)
 /// on its own, once with the denoiser on and once with it off, plus the cheapest and the most
 /// expensive corners, and the frame without the radiance cache: with one bounce, and as a
 /// 1-spp path tracer, and gi at full rate. The first 15 took ~5 minutes at 320x180 on a
 /// 2-core lavapipe; the full grid (5 x 3 x 2 x 2 x 2 = 120) would take hours and add few new
 /// front points.
 pub const DEFAULT_CONFIGS: &[&str] = &[
-    "d0-s5-b1-r1-t0", // no temporal filtering at all: the raw one-sample frame
+    "d0-s3-b1-r1-t0", // no temporal filtering at all: the raw one-sample frame
     "d0-s1-b1-r1",
-    "d0-s5-b1-r1",
-    "d1-s5-b1-r1",
-    "d2-s5-b1-r1",
-    "d4-s5-b1-r1",    // the renderer's defaults
-    "d4-s5-b1-r1-f1", // the same with every pass: what the frame plan saves and costs
-    "d4-s5-b1-r1-g1", // the same with gi tracing every pixel every frame
-    "d4-s5-b1-r1-t0",
+    "d0-s3-b1-r1",
+    "d1-s3-b1-r1",
+    "d2-s3-b1-r1",
+    "d4-s3-b1-r1",    // the renderer's defaults
+    "d4-s3-b1-r1-f1", // the same with every pass: what the frame plan saves and costs
+    "d4-s3-b1-r1-g1", // the same with gi tracing every pixel every frame
+    "d4-s3-b1-r1-t0",
     "d4-s1-b1-r1",
+    "d4-s5-b1-r1", // the chapter's standard tier, the default until 2026-12-06
     "d4-s8-b1-r1",
-    "d0-s5-b2-r1",
-    "d4-s5-b2-r1",
-    "d0-s5-b1-r2",
-    "d4-s5-b1-r2",
+    "d0-s3-b2-r1",
+    "d4-s3-b2-r1",
+    "d0-s3-b1-r2",
+    "d4-s3-b1-r2",
     "d4-s8-b2-r2",
-    "d0-s5-b1-r1-c0", // without the radiance cache: one bounce
-    "d4-s5-b1-r1-c0",
-    "d4-s5-b8-r1-c0-g1", // a 1-spp path tracer (8 bounces, no cache) + SVGF + TAA
+    "d0-s3-b1-r1-c0", // without the radiance cache: one bounce
+    "d4-s3-b1-r1-c0",
+    "d4-s3-b8-r1-c0-g1", // a 1-spp path tracer (8 bounces, no cache) + SVGF + TAA
 ];
 
 pub fn default_configs() -> Vec<Config> {
@@ -187,12 +188,12 @@ mod tests {
         let c: Config = "d2".parse().unwrap();
         assert_eq!(c, Config { denoise_iterations: 2, ..Default::default() });
         assert_eq!("s8-t0".parse::<Config>().unwrap().to_string(), "d4-s8-b1-r1-t0");
-        assert_eq!("b8-c0".parse::<Config>().unwrap().to_string(), "d4-s5-b8-r1-c0");
+        assert_eq!("b8-c0".parse::<Config>().unwrap().to_string(), "d4-s3-b8-r1-c0");
         assert!(!"c0".parse::<Config>().unwrap().cache && "c1".parse::<Config>().unwrap().cache);
         // Half-rate gi is the default: only full rate shows in a name.
         assert!(!"g1".parse::<Config>().unwrap().gi_half_rate && "g2".parse::<Config>().unwrap().gi_half_rate);
-        assert_eq!("g2".parse::<Config>().unwrap().to_string(), "d4-s5-b1-r1");
-        assert_eq!("c0-g1".parse::<Config>().unwrap().to_string(), "d4-s5-b1-r1-c0-g1");
+        assert_eq!("g2".parse::<Config>().unwrap().to_string(), "d4-s3-b1-r1");
+        assert_eq!("c0-g1".parse::<Config>().unwrap().to_string(), "d4-s3-b1-r1-c0-g1");
         for bad in ["x3", "d", "d-1", "s0", "d9", "t2", "c2", "g0", "g3", "", "d4s5"] {
             assert!(bad.parse::<Config>().is_err(), "{bad} should not parse");
         }

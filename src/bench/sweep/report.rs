@@ -173,17 +173,17 @@ mod tests {
 
     #[test]
     fn the_first_frame_after_a_cut_is_set_against_one_path_traced_sample() {
-        let mut s = sweep(&[("d0-s5-b1-r1", 10.0, 0.3, true), ("d4-s5-b1-r1", 12.0, 0.1, true)]);
+        let mut s = sweep(&[("d0-s3-b1-r1", 10.0, 0.3, true), ("d4-s3-b1-r1", 12.0, 0.1, true)]);
         s.points[1].cut_flip = Some(0.2);
         s.points[1].first_flip = Some(0.25);
         s.points[1].luminance_ratio = Some(0.9812);
         let t = table(&s);
         assert!(t.contains("FLIP cut") && t.contains("FLIP first") && t.contains("energy"), "{t}");
-        assert!(t.lines().any(|l| l.contains("d4-s5-b1-r1") && l.contains(" 0.9812 ")), "{t}");
-        let row = t.lines().find(|l| l.contains("d4-s5-b1-r1") && l.contains("0.1000")).expect("the default's row");
+        assert!(t.lines().any(|l| l.contains("d4-s3-b1-r1") && l.contains(" 0.9812 ")), "{t}");
+        let row = t.lines().find(|l| l.contains("d4-s3-b1-r1") && l.contains("0.1000")).expect("the default's row");
         assert!(row.trim_end().ends_with("0.2000     0.2500"), "{row}");
         // A point measured without a cut shows none.
-        let row = t.lines().find(|l| l.contains("d0-s5-b1-r1")).expect("the other row");
+        let row = t.lines().find(|l| l.contains("d0-s3-b1-r1")).expect("the other row");
         assert!(row.trim_end().ends_with('-'), "{row}");
         assert!(t.contains("after a camera cut: FLIP 0.2000, 0.40x the path tracer's at 1 spp (0.5000)"), "{t}");
         assert!(t.contains("(empty cache too): FLIP 0.2500, 0.50x the path tracer's at 1 spp"), "{t}");
@@ -191,7 +191,7 @@ mod tests {
 
     #[test]
     fn a_reference_as_noisy_as_the_errors_is_called_out() {
-        let mut s = sweep(&[("d4-s5-b1-r1", 12.0, 0.1, true)]);
+        let mut s = sweep(&[("d4-s3-b1-r1", 12.0, 0.1, true)]);
         assert!(!table(&s).contains("note: the reference's own noise"), "{}", table(&s));
         s.reference.made.noise_flip = 0.06;
         let t = table(&s);
@@ -201,7 +201,7 @@ mod tests {
 
     #[test]
     fn a_cached_reference_from_another_device_says_where_it_was_made() {
-        let mut s = sweep(&[("d4-s5-b1-r1", 12.0, 0.1, true)]);
+        let mut s = sweep(&[("d4-s3-b1-r1", 12.0, 0.1, true)]);
         s.reference.cached = true;
         s.reference.made.device = "NVIDIA H200".into();
         assert!(table(&s).contains("cached, made on NVIDIA H200 (compute backend)"), "{}", table(&s));
