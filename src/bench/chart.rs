@@ -297,8 +297,7 @@ where
         marks.iter().zip(&anchors).zip(place_labels(&anchors, &sizes, plot, &[legend]))
     {
         let style = font.color(color);
-        if (place.x - anchor.0).abs().max((place.y - anchor.1).abs()) > 40 {
-            // Far from its point: a thin leader says whose label it is.
+        if needs_leader(&place, *anchor, &anchors) {
             let to = (place.x.clamp(anchor.0.min(place.x + place.w), place.x + place.w), place.y + place.h / 2);
             root.draw(&PathElement::new([*anchor, to], color.mix(0.5).stroke_width(1))).map_err(err)?;
         }
@@ -325,12 +324,29 @@ impl Rect {
     fn inside(&self, o: &Rect) -> bool {
         self.x >= o.x && self.y >= o.y && self.x + self.w <= o.x + o.w && self.y + self.h <= o.y + o.h
     }
+
+    /// The squared distance from point `p` to the box (0 inside).
+    fn distance_sq(&self, (x, y): (i32, i32)) -> i32 {
+        let dx = (self.x - x).max(x - (self.x + self.w)).max(0);
+        let dy = (self.y - y).max(y - (self.y + self.h)).max(0);
+        dx * dx + dy * dy
+    }
+}
+
+/// Whether the label at `place` needs a thin leader to its point `own` to say whose it is:
+/// when it is far from it, or when another of the `anchors` is nearer to it than its own
+/// (two configurations a few milliseconds apart: the label of one can sit beside the other).
+fn needs_leader(place: &Rect, own: (i32, i32), anchors: &[(i32, i32)]) -> bool {
+    let d = place.distance_sq(own);
+    d > 40 * 40 || anchors.iter().any(|&a| a != own && place.distance_sq(a) < d)
 }
 
 /// Boxes for labels of `sizes` beside the points at `anchors`: for each label in turn, the
-/// first spot, on rings of growing distance around its point, that stays inside `area` and
-/// overlaps no label placed before, no point and none of `keep_clear`. A label that finds none
-/// takes its first spot (a chart this crowded has a point on every spot near it).
+/// first spot, on rings of growing distance around its point, that stays inside `area`,
+/// overlaps no label placed before, no point and none of `keep_clear`, and lies no nearer to
+/// another point than to its own (else the first spot that meets the rest, with a leader). A
+/// label that finds none takes its first spot (a chart this crowded has a point on every spot
+/// near it).
 fn place_labels(anchors: &[(i32, i32)], sizes: &[(i32, i32)], area: Rect, keep_clear: &[Rect]) -> Vec<Rect> {
     const MARK: i32 = 6;
     let mut taken: Vec<Rect> =
@@ -338,29 +354,28 @@ fn place_labels(anchors: &[(i32, i32)], sizes: &[(i32, i32)], area: Rect, keep_c
     taken.extend_from_slice(keep_clear);
     let mut out = Vec::with_capacity(anchors.len());
     for (&(x, y), &(w, h)) in anchors.iter().zip(sizes) {
-        let candidates = [4, 12, 24, 40, 60, 85, 115].into_iter().flat_map(|r| {
-            [
-                (x + r, y - r - h),
-                (x + r, y + r),
-                (x - r - w, y - r - h),
-                (x - r - w, y + r),
-                (x + r, y - h / 2),
-                (x - r - w, y - h / 2),
-                (x - w / 2, y - r - h),
-                (x - w / 2, y + r),
-            ]
-        });
-        let mut first = None;
-        let mut chosen = None;
-        for (cx, cy) in candidates {
-            let b = Rect { x: cx, y: cy, w, h };
-            first.get_or_insert(b);
-            if b.inside(&area) && !taken.iter().any(|t| t.overlaps(&b)) {
-                chosen = Some(b);
-                break;
-            }
-        }
-        let b = chosen.or(first).expect("candidates are never empty");
+        let candidates = || {
+            [4, 12, 24, 40, 60, 85, 115].into_iter().flat_map(move |r| {
+                [
+                    (x + r, y - r - h),
+                    (x + r, y + r),
+                    (x - r - w, y - r - h),
+                    (x - r - w, y + r),
+                    (x + r, y - h / 2),
+                    (x - r - w, y - h / 2),
+                    (x - w / 2, y - r - h),
+                    (x - w / 2, y + r),
+                ]
+                .map(|(cx, cy)| Rect { x: cx, y: cy, w, h })
+            })
+        };
+        let fits = |b: &Rect| b.inside(&area) && !taken.iter().any(|t| t.overlaps(b));
+        let own = |b: &Rect| !needs_leader(b, (x, y), anchors);
+        let b = candidates()
+            .find(|b| fits(b) && own(b))
+            .or_else(|| candidates().find(fits))
+            .or_else(|| candidates().next())
+            .expect("candidates are never empty");
         taken.push(b);
         out.push(b);
     }
@@ -434,6 +449,20 @@ mod tests {
                 assert!(!a.overlaps(&Rect { x: x - 6, y: y - 6, w: 12, h: 12 }), "label {i} covers a point");
             }
         }
+    }
+
+    #[test]
+    fn a_label_nearer_to_another_point_gets_a_leader() {
+        // Two points 12 px apart; a label just above the right one.
+        let (left, right) = ((100, 100), (112, 100));
+        let above_right = Rect { x: 108, y: 80, w: 60, h: 14 };
+        assert!(needs_leader(&above_right, left, &[left, right]), "it reads as the right point's label");
+        assert!(!needs_leader(&above_right, right, &[left, right]), "beside its own point");
+        // Level with both points, left of the left one: the left one's, though the right one
+        // is as near along either axis alone.
+        let level_left = Rect { x: 40, y: 86, w: 60, h: 14 };
+        assert!(needs_leader(&level_left, right, &[left, right]) && !needs_leader(&level_left, left, &[left, right]));
+        assert!(needs_leader(&Rect { x: 200, y: 100, w: 60, h: 14 }, right, &[right]), "far from its point");
     }
 
     #[test]
