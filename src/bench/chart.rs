@@ -466,6 +466,16 @@ mod tests {
     }
 
     #[test]
+    fn a_label_is_placed_nearer_its_own_point_than_a_close_neighbour() {
+        // Two points 12 px apart (two configurations 10 ms apart), labels wider than the gap.
+        let anchors = [(100, 100), (112, 100)];
+        let placed = place_labels(&anchors, &[(60, 14); 2], Rect { x: 0, y: 0, w: 400, h: 300 }, &[]);
+        for (i, (b, &own)) in placed.iter().zip(&anchors).enumerate() {
+            assert!(!needs_leader(b, own, &anchors), "label {i} at {b:?} reads as the other point's");
+        }
+    }
+
+    #[test]
     fn log_ticks_cover_the_range() {
         assert_eq!(log_ticks(0.05, 0.6), vec![0.05, 0.1, 0.2, 0.5]);
         let fine = log_ticks(0.15, 0.5);
