@@ -2,12 +2,17 @@
 //! Appendix B material written as a Mitsuba BSDF plugin (tools/mitsuba_reference.py, which also
 //! writes the scenes). For each scene under tests/mitsuba/ the committed files are the glTF
 //! scene, two Mitsuba renders with different seeds (mitsuba-a.exr, mitsuba-b.exr), one at 16
-//! times their spp (mitsuba-converged.exr) and mitsuba.json (size and spp). This test renders
-//! `hybrid-rt reference` on the same glTF at the same size and spp as the pair, and requires:
+//! times their spp (mitsuba-converged.exr) and mitsuba.json (the scene's file, size and spp).
+//! One scene nobody here wrote, the nvpro Cornell box, is read from ../shared/scenes (its folder
+//! here holds only the renders). This test renders `hybrid-rt reference` on the same glTF at
+//! the same size and spp as the pair, and requires:
 //!
 //! - mean luminance within 0.5 % of Mitsuba's converged render: the energy of the material
 //!   model, bounce after bounce in a closed room (the noise of the mean at 512 spp is about
-//!   0.13 %, so the bound is ~4 standard errors);
+//!   0.13 %, so the bound is ~4 standard errors). The nvpro box's light also lights a narrow
+//!   gap above it, where light bounces many times: a noisy mean even at its 8192 spp (four
+//!   seeds of hybrid-rt's reference at 2048 spp spread over 0.988..1.007 of Mitsuba's, a
+//!   standard deviation of about 0.9 %, so about 0.45 % at 8192), so its bound is 2 %;
 //! - HDR-FLIP against mitsuba-a within 1.15 x Mitsuba's own noise floor, the HDR-FLIP between
 //!   its two renders: per pixel, no more different from Mitsuba than Mitsuba is from itself.
 //!
@@ -31,6 +36,8 @@ use std::time::Instant;
 
 /// Mean luminance may differ from Mitsuba's by this fraction.
 const LUMINANCE_TOLERANCE: f64 = 0.005;
+/// The nvpro Cornell box's bound (its mean is noisier: see the module's comment).
+const NVPRO_LUMINANCE_TOLERANCE: f64 = 0.02;
 /// HDR-FLIP against Mitsuba may exceed Mitsuba's own noise floor by this factor.
 const FLIP_FACTOR: f64 = 1.15;
 
@@ -38,16 +45,27 @@ fn scene_dir(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mitsuba").join(name)
 }
 
-/// Size and spp the Mitsuba renders were made with (mitsuba.json).
-fn mitsuba_settings(dir: &Path) -> (u32, u32, u32) {
+/// What the Mitsuba renders in `dir` were made of (mitsuba.json).
+struct MitsubaSettings {
+    /// The glTF file, from the repository's root (../shared/scenes/... for a shared scene).
+    scene: PathBuf,
+    size: (u32, u32),
+    spp: u32,
+}
+
+fn mitsuba_settings(dir: &Path) -> MitsubaSettings {
     let path = dir.join("mitsuba.json");
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let json: serde_json::Value = serde_json::from_str(&text).unwrap();
     let size = &json["size"];
-    let (w, h, spp) = (size[0].as_u64(), size[1].as_u64(), json["spp"].as_u64());
-    match (w, h, spp) {
-        (Some(w), Some(h), Some(spp)) => (w as u32, h as u32, spp as u32),
-        _ => panic!("{}: expected size [w, h] and spp", path.display()),
+    let (scene, w, h, spp) = (json["scene"].as_str(), size[0].as_u64(), size[1].as_u64(), json["spp"].as_u64());
+    match (scene, w, h, spp) {
+        (Some(scene), Some(w), Some(h), Some(spp)) => MitsubaSettings {
+            scene: Path::new(env!("CARGO_MANIFEST_DIR")).join(scene),
+            size: (w as u32, h as u32),
+            spp: spp as u32,
+        },
+        _ => panic!("{}: expected scene, size [w, h] and spp", path.display()),
     }
 }
 
@@ -57,9 +75,9 @@ fn mean_luminance(img: &CpuImage) -> f64 {
     sum / img.pixel_count() as f64
 }
 
-/// hybrid-rt's reference of the scene in `dir` at Mitsuba's size and spp.
-fn render_reference(ctx: &Arc<Context>, dir: &Path, brdf: BrdfModel, spp: u32, size: (u32, u32)) -> CpuImage {
-    let scene = load_gltf(&dir.join("scene.gltf"), &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"));
+/// hybrid-rt's reference of the glTF file at Mitsuba's size and spp.
+fn render_reference(ctx: &Arc<Context>, file: &Path, brdf: BrdfModel, spp: u32, size: (u32, u32)) -> CpuImage {
+    let scene = load_gltf(file, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"));
     let settings = Settings {
         width: size.0,
         height: size.1,
@@ -83,15 +101,16 @@ struct Comparison {
 
 fn compare(ctx: &Arc<Context>, name: &str, brdf: BrdfModel, spp_override: Option<u32>) -> Comparison {
     let dir = scene_dir(name);
-    let (w, h, spp) = mitsuba_settings(&dir);
-    let spp = spp_override.unwrap_or(spp);
+    let settings = mitsuba_settings(&dir);
+    let (w, h) = settings.size;
+    let spp = spp_override.unwrap_or(settings.spp);
     let read = |f: &str| image_io::read_exr_rgba(&dir.join(f)).unwrap_or_else(|e| panic!("{e:#}"));
     let (a, b, converged) = (read("mitsuba-a.exr"), read("mitsuba-b.exr"), read("mitsuba-converged.exr"));
     for img in [&a, &b, &converged] {
         assert_eq!((img.width, img.height), (w, h), "{name}: EXR sizes differ from mitsuba.json");
     }
     let start = Instant::now();
-    let ours = render_reference(ctx, &dir, brdf, spp, (w, h));
+    let ours = render_reference(ctx, &settings.scene, brdf, spp, (w, h));
     let seconds = start.elapsed().as_secs_f64();
     let mitsuba_mean = mean_luminance(&converged);
     let opts = HdrFlipOptions::default();
@@ -115,13 +134,13 @@ fn compare(ctx: &Arc<Context>, name: &str, brdf: BrdfModel, spp_override: Option
     c
 }
 
-fn check_scene(name: &str) {
+fn check_scene(name: &str, luminance_tolerance: f64) {
     let ctx = common::validated_context();
     {
         let c = compare(&ctx, name, BrdfModel::Gltf, None);
         assert!(
-            (c.luminance_ratio - 1.0).abs() <= LUMINANCE_TOLERANCE,
-            "{name}: mean luminance {:.4} x Mitsuba's (tolerance {LUMINANCE_TOLERANCE})",
+            (c.luminance_ratio - 1.0).abs() <= luminance_tolerance,
+            "{name}: mean luminance {:.4} x Mitsuba's (tolerance {luminance_tolerance})",
             c.luminance_ratio
         );
         assert!(
@@ -136,17 +155,30 @@ fn check_scene(name: &str) {
 
 #[test]
 fn diffuse_box_matches_mitsuba() {
-    check_scene("diffuse_box");
+    check_scene("diffuse_box", LUMINANCE_TOLERANCE);
 }
 
 #[test]
 fn glossy_blocks_match_mitsuba() {
-    check_scene("glossy_blocks");
+    check_scene("glossy_blocks", LUMINANCE_TOLERANCE);
 }
 
 #[test]
 fn textured_scene_matches_mitsuba() {
-    check_scene("textured");
+    check_scene("textured", LUMINANCE_TOLERANCE);
+}
+
+/// A real glTF file nobody here wrote: interleaved buffers, a blended sphere (alpha 0.05, which
+/// Mitsuba's `volpath` crosses as hybrid-rt does, paths and shadow rays), double-sided
+/// materials, and a box-shaped light 0.27 m under the ceiling whose top face lights the gap
+/// above it. In that gap light bounces many times: the hybrid frame reads 0.69 of this mean
+/// (Known gaps), the reference must not.
+#[test]
+fn nvpro_cornell_box_matches_mitsuba() {
+    if common::shared_scenes().is_none() {
+        return;
+    }
+    check_scene("nvpro_cornell_box", NVPRO_LUMINANCE_TOLERANCE);
 }
 
 /// The luminance bound can fail: the energy-coupled diffuse lobe, not the specification's,
@@ -156,7 +188,7 @@ fn textured_scene_matches_mitsuba() {
 fn the_coupled_model_misses_the_bound() {
     let ctx = common::validated_context();
     {
-        let (_, _, spp) = mitsuba_settings(&scene_dir("diffuse_box"));
+        let spp = mitsuba_settings(&scene_dir("diffuse_box")).spp;
         let c = compare(&ctx, "diffuse_box", BrdfModel::Coupled, Some((spp / 4).max(1)));
         assert!(
             (c.luminance_ratio - 1.0).abs() > LUMINANCE_TOLERANCE,

@@ -5,17 +5,21 @@ Mitsuba 3 with the glTF 2.0 Appendix B material written here as a Mitsuba BSDF p
     python3 tools/mitsuba_reference.py scenes        # write the test scenes (standard library only)
     python3 tools/mitsuba_reference.py check-bsdf    # the plugin's sample() against eval()/pdf()
     python3 tools/mitsuba_reference.py render [NAME ...] [--spp N] [--size WxH]
+    python3 tools/mitsuba_reference.py render nvpro_cornell_box   # a scene of ../shared/scenes
 
 `scenes` writes tests/mitsuba/<name>/scene.gltf (buffers inline as data URIs, textures as PNG
 beside it). `render` reads those glTF files with the small glTF reader below (the subset the
-scenes use: node TRS, triangle meshes with POSITION/NORMAL/TEXCOORD_0, metallic-roughness
-materials with a nearest-filtered baseColorTexture, emission with
-KHR_materials_emissive_strength, KHR_lights_punctual point lights, one perspective camera;
-anything else is refused with a message), builds the same scene in Mitsuba (world-space
+scenes use: node TRS or matrices, triangle meshes with POSITION/NORMAL/TEXCOORD_0 (interleaved
+or not), metallic-roughness materials with a nearest-filtered baseColorTexture, alphaMode BLEND
+(a `mask` BSDF of opacity alpha, rendered with `volpath`, whose shadow rays cross it as
+hybrid-rt's do), emission with KHR_materials_emissive_strength (double-sided only on a closed
+mesh), KHR_lights_punctual point lights, one perspective camera; anything else is refused with
+a message), builds the same scene in Mitsuba (world-space
 meshes written as PLY, an area emitter per emissive mesh, a point emitter per point light,
 the camera by look-at from its node, a box pixel filter) and renders it twice with
 different seeds at the same size and spp: tests/mitsuba/<name>/mitsuba-a.exr and
-mitsuba-b.exr, linear RGB. The difference between the two is Mitsuba's own noise floor;
+mitsuba-b.exr, linear RGB. A scene of ../shared/scenes (SHARED_SCENES) is read where it
+lies, never copied: only its renders and mitsuba.json go to tests/mitsuba/<name>/. The difference between the two is Mitsuba's own noise floor;
 tests/mitsuba.rs renders `hybrid-rt reference` on the same glTF file at the same size and
 spp and compares. A third render at 16 times the spp (mitsuba-converged.exr) gives the mean
 luminance with little noise of its own. mitsuba.json beside them records the settings, the
@@ -46,6 +50,12 @@ OUT_DIR = os.path.join(ROOT, "tests", "mitsuba")
 SCENES = ["diffuse_box", "glossy_blocks", "textured"]
 DEFAULT_SIZE = (64, 64)
 DEFAULT_SPP = 512
+# Scenes nobody here wrote, read where CI has them (../shared/scenes beside the checkout; never
+# copied into the project): name -> (path under ../shared/scenes, size, spp). The nvpro Cornell
+# box's camera is 4:3; its light is a closed box under the ceiling whose top face lights a
+# narrow gap, where light bounces many times: a noisy mean, hence the spp.
+SHARED_SCENES = {"nvpro_cornell_box": ("nvpro-cornell-box/cornellBox.gltf", (64, 48), 8192)}
+SHARED_DIR = os.path.join(os.path.dirname(ROOT), "shared", "scenes")
 # The converged render (for the mean luminance) takes this many times the spp, seed 2.
 CONVERGED_FACTOR = 16
 SEEDS = (0, 1)
@@ -293,6 +303,16 @@ def srgb_to_linear(c):
     return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
 
 
+def closed_mesh(pos, idx):
+    """Whether every edge of the triangles (vertices welded by position) has two triangles."""
+    import numpy as np
+    _, weld = np.unique(np.round(pos, 6), axis=0, return_inverse=True)
+    tri = weld.reshape(-1)[idx.reshape(-1, 3)]
+    edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
 def read_gltf(path):
     """The scene as plain data: meshes in world space with their materials, point lights,
     the camera (position, forward, up, yfov)."""
@@ -314,15 +334,21 @@ def read_gltf(path):
     def accessor(i):
         a = doc["accessors"][i]
         view = doc["bufferViews"][a["bufferView"]]
-        if view.get("byteStride"):
-            fail(path, "interleaved buffer views are not supported")
         dtype = {5126: np.float32, 5125: np.uint32, 5123: np.uint16}.get(a["componentType"])
         if dtype is None:
             fail(path, f"accessor {i}: component type {a['componentType']} not supported")
         comps = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[a["type"]]
         start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
-        data = np.frombuffer(buffers[view["buffer"]], dtype=dtype, count=a["count"] * comps, offset=start)
-        return data.reshape(a["count"], comps) if comps > 1 else data
+        size = np.dtype(dtype).itemsize
+        stride = view.get("byteStride") or comps * size
+        if stride % size:
+            fail(path, f"accessor {i}: byteStride {stride} is not a multiple of the component size")
+        # An interleaved view: every stride/size-th run of comps components.
+        step = stride // size
+        words = np.frombuffer(buffers[view["buffer"]], dtype=dtype, count=(a["count"] - 1) * step + comps,
+                              offset=start)
+        data = np.lib.stride_tricks.as_strided(words, (a["count"], comps), (stride, size)).copy()
+        return data if comps > 1 else data[:, 0]
 
     textures = {}
 
@@ -351,15 +377,20 @@ def read_gltf(path):
         for unsupported in ("normalTexture", "occlusionTexture", "emissiveTexture"):
             if unsupported in m:
                 fail(path, f"material {m.get('name')}: {unsupported} not supported")
-        if "metallicRoughnessTexture" in pbr or m.get("alphaMode", "OPAQUE") != "OPAQUE":
-            fail(path, f"material {m.get('name')}: metallicRoughnessTexture and alpha modes are not supported")
+        if "metallicRoughnessTexture" in pbr or m.get("alphaMode", "OPAQUE") == "MASK":
+            fail(path, f"material {m.get('name')}: metallicRoughnessTexture and alphaMode MASK are not supported")
         strength = m.get("extensions", {}).get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
         emission = [e * strength for e in m.get("emissiveFactor", [0, 0, 0])]
-        if any(emission) and m.get("doubleSided"):
-            fail(path, f"material {m.get('name')}: double-sided emitters are not supported")
+        blend = m.get("alphaMode", "OPAQUE") == "BLEND"
+        if any(emission) and blend:
+            fail(path, f"material {m.get('name')}: blended emitters are not supported")
         materials.append({
             "name": m.get("name", ""),
             "base": pbr.get("baseColorFactor", [1, 1, 1, 1])[:3],
+            # alphaMode BLEND: the share of each point the surface covers (hybrid-rt passes the
+            # rest straight through, paths and shadow rays alike).
+            "alpha": pbr.get("baseColorFactor", [1, 1, 1, 1])[3] if blend else 1.0,
+            "double_sided": bool(m.get("doubleSided")),
             "texture": texture(pbr["baseColorTexture"]) if "baseColorTexture" in pbr else None,
             "metallic": pbr.get("metallicFactor", 1.0),
             "roughness": pbr.get("roughnessFactor", 1.0),
@@ -385,8 +416,13 @@ def read_gltf(path):
                 world = pos @ lin.T + np.array([row[3] for row in m[:3]])
                 nrm_w = nrm @ np.linalg.inv(lin)
                 nrm_w /= np.linalg.norm(nrm_w, axis=1, keepdims=True)
+                material = materials[prim["material"]]
+                # Mitsuba's area emitters are one-sided. A double-sided emitter is the same only
+                # where its mesh is closed: its back faces face its inside, which no light leaves.
+                if any(material["emission"]) and material["double_sided"] and not closed_mesh(pos, idx):
+                    fail(path, f"material {material['name']}: a double-sided emitter on an open mesh is not supported")
                 meshes.append({"name": node.get("name", f"node{i}"), "pos": world, "nrm": nrm_w, "uv": uv,
-                               "idx": idx, "material": materials[prim["material"]]})
+                               "idx": idx, "material": material})
         light = node.get("extensions", {}).get("KHR_lights_punctual")
         if light is not None:
             ld = lights_def[light["light"]]
@@ -556,9 +592,16 @@ def set_variant(variant):
     return mi
 
 
+def integrator(meshes):
+    """`path`, or where a blended surface lets light through, `volpath`: its shadow rays cross
+    a `mask` BSDF's uncovered share (scaled by it), as hybrid-rt's do; `path`'s would stop."""
+    return "volpath" if any(m["material"]["alpha"] < 1.0 for m in meshes) else "path"
+
+
 def mitsuba_scene(mi, path, size, tmp):
     import numpy as np
     meshes, lights, camera = read_gltf(path)
+    kind = integrator(meshes)
     width, height = size
     if camera["aspect"] is not None and abs(camera["aspect"] - width / height) > 1e-6:
         fail(path, f"the camera's aspect ratio {camera['aspect']} differs from {width}x{height}")
@@ -568,7 +611,7 @@ def mitsuba_scene(mi, path, size, tmp):
         "type": "scene",
         # hybrid-rt's reference: one light sample and one BSDF sample per vertex, power-heuristic
         # MIS, Russian roulette from the fourth vertex; paths end only by roulette.
-        "integrator": {"type": "path", "max_depth": -1, "rr_depth": 4},
+        "integrator": {"type": kind, "max_depth": -1, "rr_depth": 4},
         "sensor": {
             "type": "perspective", "fov_axis": "y", "fov": math.degrees(camera["yfov"]),
             "near_clip": 0.05, "far_clip": 1e4,
@@ -596,9 +639,10 @@ def mitsuba_scene(mi, path, size, tmp):
                     "wrap_mode": "repeat"}
         else:
             base = {"type": "rgb", "value": mat["base"]}
-        entry = {"type": "ply", "filename": ply, "face_normals": True,
-                 "bsdf": {"type": "gltf_pbr", "base_color": base, "metallic": mat["metallic"],
-                          "roughness": mat["roughness"]}}
+        bsdf = {"type": "gltf_pbr", "base_color": base, "metallic": mat["metallic"], "roughness": mat["roughness"]}
+        if mat["alpha"] < 1.0:
+            bsdf = {"type": "mask", "opacity": {"type": "rgb", "value": [mat["alpha"]] * 3}, "bsdf": bsdf}
+        entry = {"type": "ply", "filename": ply, "face_normals": True, "bsdf": bsdf}
         if any(mat["emission"]):
             area = 0.0
             tri = m["pos"][m["idx"].reshape(-1, 3)]
@@ -610,25 +654,36 @@ def mitsuba_scene(mi, path, size, tmp):
         scene[f"light{i}"] = {"type": "point", "position": light["position"],
                               "intensity": {"type": "rgb", "value": light["intensity"]},
                               "sampling_weight": 4 * math.pi * luminance(light["intensity"])}
-    return mi.load_dict(scene)
+    return mi.load_dict(scene), kind
 
 
 def render(args):
     import tempfile
     import numpy as np
     mi = set_variant(args.variant)
-    width, height = (int(v) for v in args.size.lower().split("x"))
     for name in args.names or SCENES:
         folder = os.path.join(OUT_DIR, name)
-        path = os.path.join(folder, "scene.gltf")
+        size, spp = DEFAULT_SIZE, DEFAULT_SPP
+        if name in SHARED_SCENES:
+            rel, size, spp = SHARED_SCENES[name]
+            path = os.path.join(SHARED_DIR, rel)
+            scene_name = f"../shared/scenes/{rel}"
+            os.makedirs(folder, exist_ok=True)
+        else:
+            path = os.path.join(folder, "scene.gltf")
+            scene_name = f"tests/mitsuba/{name}/scene.gltf"
         if not os.path.exists(path):
-            sys.exit(f"{path}: missing; run `python3 tools/mitsuba_reference.py scenes` first")
-        record = {"scene": f"tests/mitsuba/{name}/scene.gltf", "size": [width, height], "spp": args.spp,
-                  "mitsuba": mi.__version__, "variant": args.variant, "integrator": "path (max_depth -1, rr_depth 4)",
+            sys.exit(f"{path}: missing; run `python3 tools/mitsuba_reference.py scenes` first"
+                     if name not in SHARED_SCENES else f"{path}: missing (../shared/scenes beside the checkout)")
+        width, height = (int(v) for v in args.size.lower().split("x")) if args.size else size
+        spp = args.spp or spp
+        record = {"scene": scene_name, "size": [width, height], "spp": spp,
+                  "mitsuba": mi.__version__, "variant": args.variant,
                   "renders": []}
         with tempfile.TemporaryDirectory() as tmp:
-            scene = mitsuba_scene(mi, path, (width, height), tmp)
-            runs = [(SEEDS[0], "a", args.spp), (SEEDS[1], "b", args.spp), (2, "converged", CONVERGED_FACTOR * args.spp)]
+            scene, kind = mitsuba_scene(mi, path, (width, height), tmp)
+            record["integrator"] = f"{kind} (max_depth -1, rr_depth 4)"
+            runs = [(SEEDS[0], "a", spp), (SEEDS[1], "b", spp), (2, "converged", CONVERGED_FACTOR * spp)]
             for seed, label, spp in runs:
                 start = time.time()
                 img = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float32)[:, :, :3]
@@ -719,9 +774,10 @@ def main():
     c.add_argument("--samples", type=int, default=1 << 20)
     c.add_argument("--variant", default="llvm_ad_rgb")
     r = sub_.add_parser("render", help="render the scenes with Mitsuba (two seeds each)")
-    r.add_argument("names", nargs="*", help=f"scenes (default: all of {', '.join(SCENES)})")
-    r.add_argument("--spp", type=int, default=DEFAULT_SPP)
-    r.add_argument("--size", default="%dx%d" % DEFAULT_SIZE)
+    r.add_argument("names", nargs="*", help=f"scenes (default: all of {', '.join(SCENES)}; also "
+                   f"{', '.join(SHARED_SCENES)} from ../shared/scenes)")
+    r.add_argument("--spp", type=int, help=f"default {DEFAULT_SPP}, or the shared scene's")
+    r.add_argument("--size", help="WxH; default %dx%d, or the shared scene's" % DEFAULT_SIZE)
     r.add_argument("--variant", default="llvm_ad_rgb")
     args = ap.parse_args()
     if args.command == "scenes":
