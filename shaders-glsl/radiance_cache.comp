@@ -195,7 +195,7 @@ void update(uint slot) {
 // it, so one cell's restart stands for its neighbours' surfaces too; a still scene restarts
 // none.
 bool restarted_near(vec3 p, vec3 n) {
-    RcLattice lattice = rc_lattice(p, n, rc_cell_size(p));
+    RcLattice lattice = rc_lattice(p, n);
     bool any_restarted = false;
     [[unroll]] for (int i = 0; i < 4; ++i) {
         uint slot = rc_find_key(rc_cell_key(rc_lattice_cell(lattice, i), lattice.cell, lattice.bucket), false);
@@ -211,7 +211,7 @@ void view(ivec2 px) {
         return;
     }
     vec3 p = world_position(px, imageLoad(g_depth, px).r);
-    uint slot = rc_find(p, imageLoad(g_normal_geo, px).xyz, rc_cell_size(p), false);
+    uint slot = rc_find(p, imageLoad(g_normal_geo, px).xyz, false);
     imageStore(out_irradiance, px, slot == RC_NONE ? vec4(0.0) : rc_cells[slot].radiance[rc_copy_written(frame.frame_index)]);
     // No cell restarted this frame (a still scene, always): none to look for around p.
     uint restarted = rc.restarted[frame.frame_index % 3u];

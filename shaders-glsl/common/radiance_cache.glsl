@@ -10,9 +10,8 @@
 // one BRDF sample's weight.
 //
 // A cell is keyed by its position quantised to a cell size that doubles with the distance from
-// the camera (halved, up to RC_FINER_LEVELS times, for a query whose ray is too short for it),
-// and by the dominant axis and sign of the geometric normal (the two faces of a thin wall never
-// share a cell). A query of an absent cell claims a slot for it (compare-and-swap on
+// the camera, and by the dominant axis and sign of the geometric normal (the two faces of a thin
+// wall never share a cell). A query of an absent cell claims a slot for it (compare-and-swap on
 // the key's checksum) and proposes its point and normal; the next update adopts the proposal
 // that wins an atomic minimum and traces from there as long as the cell lives. A query from a
 // point the adopted one cannot see (a floor cell that straddles a wall thinner than a cell) is
@@ -47,10 +46,8 @@
 // Linear probes after the home slot of a key.
 #define RC_PROBES 8u
 // A ray shorter than this many cells ends in a cell that may hold the ray's own origin (a
-// corner): it asks a finer level, or where even the finest is too large, the caller traces on.
+// corner): the caller traces on instead.
 #define RC_MIN_CELLS 1.7320508
-// Levels finer than the camera distance's that a short ray may ask (each halves the cell).
-#define RC_FINER_LEVELS 3u
 // The visibility ray between a query and a cell's point runs this many cells above both
 // surfaces: a ray skimming a surface at a few ulps would often hit the surface itself.
 #define RC_LIFT_CELLS 0.1
@@ -124,8 +121,11 @@ uvec2 rc_cell_key(ivec3 c, float cell, uint bucket) {
     return uvec2(h & (rc.capacity - 1u), check);
 }
 
-// Home slot and checksum of the cell of size `cell` holding (p, n).
-uvec2 rc_key(vec3 p, vec3 n, float cell) { return rc_cell_key(ivec3(floor(p / cell)), cell, rc_normal_bucket(n)); }
+// Home slot and checksum of the cell holding (p, n).
+uvec2 rc_key(vec3 p, vec3 n) {
+    float cell = rc_cell_size(p);
+    return rc_cell_key(ivec3(floor(p / cell)), cell, rc_normal_bucket(n));
+}
 
 #define RC_NONE 0xffffffffu
 
@@ -146,7 +146,7 @@ uint rc_find_key(uvec2 k, bool claim) {
 }
 
 // The slot of the cell holding (p, n) (rc_find_key).
-uint rc_find(vec3 p, vec3 n, float cell, bool claim) { return rc_find_key(rc_key(p, n, cell), claim); }
+uint rc_find(vec3 p, vec3 n, bool claim) { return rc_find_key(rc_key(p, n), claim); }
 
 // 12 + 12 bits: the octahedral map of a unit vector.
 uint rc_pack_normal(vec3 n) {
@@ -166,7 +166,8 @@ vec3 rc_unpack_normal(uint v) {
 // A query's proposal of its point (8 bits per axis within the cell) and normal for a cell that
 // has none yet. The rank, a hash of the quantised point, makes the winner a random one of the
 // proposals rather than the one nearest a corner, and the same one whatever the threads' order.
-void rc_propose(uint slot, vec3 p, vec3 n, float cell) {
+void rc_propose(uint slot, vec3 p, vec3 n) {
+    float cell = rc_cell_size(p);
     vec3 corner = floor(p / cell) * cell;
     uvec3 q = uvec3(clamp((p - corner) / cell, 0.0, 1.0) * 255.0 + 0.5);
     uint position = q.x << 16 | q.y << 8 | q.z;
@@ -204,9 +205,9 @@ struct RcLattice {
     vec2 f;         // p's position in the square
 };
 
-RcLattice rc_lattice(vec3 p, vec3 n, float cell) {
+RcLattice rc_lattice(vec3 p, vec3 n) {
     RcLattice l;
-    l.cell = cell;
+    l.cell = rc_cell_size(p);
     l.bucket = rc_normal_bucket(n);
     uint axis = l.bucket / 2u;
     l.u = axis == 0u ? 1u : 0u;
@@ -241,8 +242,8 @@ float rc_lattice_weight(RcLattice l, int i) {
 // wall thinner than a cell, where a neighbour's point may lie behind the wall (only p's own
 // cell's point is checked by a visibility ray). Four lookups, no ray.
 #define RC_BLEND_RANGE 4.0
-vec3 rc_blend(vec3 p, vec3 n, float cell, uint copy, vec3 home) {
-    RcLattice lattice = rc_lattice(p, n, cell);
+vec3 rc_blend(vec3 p, vec3 n, uint copy, vec3 home) {
+    RcLattice lattice = rc_lattice(p, n);
     float home_l = luminance(home);
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
@@ -274,31 +275,23 @@ vec3 rc_blend(vec3 p, vec3 n, float cell, uint copy, vec3 home) {
 // rc_blend's.
 bool rc_lookup(vec3 p, vec3 n, float t, bool from_screen, bool blend, uint copy, out RcCandidate a) {
     a = RcCandidate(RC_NONE, vec3(0.0), vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0, false);
-    if (rc.enabled == 0u) return false;
-    // A ray too short for the cells at p asks a finer level (RC_FINER_LEVELS at most): a
-    // corner, or a gap under the ceiling narrower than a cell, is answered by cells its own size.
-    // Not a blended query: a mirror shows that answer unfiltered, and a fine cell, young and
-    // queried by few, would show as a blotch in it (it traces on instead).
-    float cell = rc_cell_size(p);
-    uint finer = blend ? 0u : RC_FINER_LEVELS;
-    for (uint level = 0u; level < finer && t < RC_MIN_CELLS * cell; ++level) cell *= 0.5;
-    if (t < RC_MIN_CELLS * cell) return false;
-    uint slot = rc_find(p, n, cell, from_screen);
+    if (rc.enabled == 0u || t < RC_MIN_CELLS * rc_cell_size(p)) return false;
+    uint slot = rc_find(p, n, from_screen);
     if (slot == RC_NONE) return false;
     if (from_screen) {
         rc_cells[slot].point.w = RC_LIFE;
-        if (rc_cells[slot].normal.w == 0.0) rc_propose(slot, p, n, cell);
+        if (rc_cells[slot].normal.w == 0.0) rc_propose(slot, p, n);
     }
     vec4 radiance = rc_cells[slot].radiance[copy];
     a.empty = rc_cells[slot].normal.w == 0.0 || radiance.a <= 0.0;
     if (a.empty) return false;
     a.slot = slot;
-    float lift = RC_LIFT_CELLS * cell;
+    float lift = RC_LIFT_CELLS * rc_cell_size(p);
     a.from = p + n * lift;
     vec3 d = rc_cells[slot].point.xyz + rc_cells[slot].normal.xyz * lift - a.from;
     a.len = length(d);
     a.dir = a.len > 1e-6 ? d / a.len : vec3(0.0, 0.0, 1.0);
-    a.c = blend ? rc_blend(p, n, cell, copy, radiance.rgb) : radiance.rgb;
+    a.c = blend ? rc_blend(p, n, copy, radiance.rgb) : radiance.rgb;
     return true;
 }
 
