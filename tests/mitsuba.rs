@@ -171,7 +171,7 @@ fn textured_scene_matches_mitsuba() {
 /// A real glTF file nobody here wrote: interleaved buffers, a blended sphere (alpha 0.05, which
 /// Mitsuba's `volpath` crosses as hybrid-rt does, paths and shadow rays), double-sided
 /// materials, and a box-shaped light 0.27 m under the ceiling whose top face lights the gap
-/// above it. In that gap light bounces many times: the hybrid frame reads 0.69 of this mean
+/// above it. In that gap light bounces many times: the hybrid frame reads 0.76 of this mean
 /// (Known gaps), the reference must not.
 #[test]
 fn nvpro_cornell_box_matches_mitsuba() {
