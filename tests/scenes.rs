@@ -146,7 +146,9 @@ fn reference_spp(ctx: &Arc<Context>, scene: Scene, env: Environment, like: &Pict
         // 16-bounce reference the frame is 0.43 on nvpro-cornell-box although the medians
         // agree (0.0115 and 0.0114): half of the gap sits in 20 pixels at the rim of its
         // ceiling light, where the reference's light grows with every bounce (16 at 4 bounces,
-        // 42 at 16) and the frame shows 2.9. Not understood yet (see the README's known gaps).
+        // 42 at 16) and the frame shows 2.9: light trapped in the gap between the light and the
+        // ceiling, whose rays are too short for the cache to answer. The reference is right there
+        // (tests/mitsuba.rs checks it against Mitsuba); the frame is not (the README's known gaps).
         mode: RenderMode::Reference { seed: 3, max_bounces: 2 },
         ..Default::default()
     };

@@ -18,8 +18,9 @@ a message), builds the same scene in Mitsuba (world-space
 meshes written as PLY, an area emitter per emissive mesh, a point emitter per point light,
 the camera by look-at from its node, a box pixel filter) and renders it twice with
 different seeds at the same size and spp: tests/mitsuba/<name>/mitsuba-a.exr and
-mitsuba-b.exr, linear RGB. A scene of ../shared/scenes (SHARED_SCENES) is read where it
-lies, never copied: only its renders and mitsuba.json go to tests/mitsuba/<name>/. The difference between the two is Mitsuba's own noise floor;
+mitsuba-b.exr, linear RGB; the difference between the two is Mitsuba's own noise floor. A
+scene of ../shared/scenes (SHARED_SCENES) is read where it lies, never copied: only its
+renders and mitsuba.json go to tests/mitsuba/<name>/.
 tests/mitsuba.rs renders `hybrid-rt reference` on the same glTF file at the same size and
 spp and compares. A third render at 16 times the spp (mitsuba-converged.exr) gives the mean
 luminance with little noise of its own. mitsuba.json beside them records the settings, the
