@@ -645,7 +645,6 @@ def mitsuba_scene(mi, path, size, tmp):
             bsdf = {"type": "mask", "opacity": {"type": "rgb", "value": [mat["alpha"]] * 3}, "bsdf": bsdf}
         entry = {"type": "ply", "filename": ply, "face_normals": True, "bsdf": bsdf}
         if any(mat["emission"]):
-            area = 0.0
             tri = m["pos"][m["idx"].reshape(-1, 3)]
             area = float(0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
             entry["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": mat["emission"]},
