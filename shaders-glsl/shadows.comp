@@ -12,7 +12,7 @@
 //   image's summed penumbra measure exceeds it. Sample points come from an R2 sequence indexed
 //   by (frame mod 4, the pixel's place in its 3x3 block, sample), like the chapter's Poisson
 //   sets.
-// - Lights out of range at a pixel (range window 0) are culled: visibility 0, no rays.
+// - Lights out of range at a pixel (range window 0) are culled: visibility 1, no rays.
 // - Tinted glass: the visibility is grey (the mean of the channels that pass), and the colour
 //   goes beside it in `tint` (common/shadow_tint.glsl), carried with the visibility it belongs
 //   to: a soft light's reused visibility keeps the tint of the frame that traced it.
@@ -165,8 +165,16 @@ void main() {
         if (mesh && sp.mesh_triangles[i] == 0u) break;
         vec3 unshadowed = mesh ? vec3(1.0) : sample_punctual(lights[i], p).radiance;
         if (dot(unshadowed, unshadowed) == 0.0) {
-            // Culled by range (or outside a spot's cone): dark, no rays, nothing to filter.
-            vis[i] = 0.0;
+            // Culled by range (or outside a spot's cone): no light, no rays. Unoccluded by
+            // definition, as where no point of a light sends any (trace_visibility): a 0 here
+            // would make the cone's or range's edge a shadow edge, and TAA's jitter, moving
+            // pixels across it, a penumbra that drew s_max rays a frame along it (a band of the
+            // default scene's walls) and the filter's widest kernel. The ring forgets what was
+            // there before, as a hard light's does.
+            vis[i] = 1.0;
+            r0[i] = 1.0;
+            r1[i] = 1.0;
+            r2v[i] = 1.0;
             continue;
         }
         bool tested;

@@ -335,6 +335,46 @@ fn hard_lights_use_one_ray_and_no_filter() {
     common::assert_validation_clean(ctx);
 }
 
+/// A soft spot light over an open floor: nothing occludes it, so nothing is a penumbra. Its
+/// cone's edge on the floor is not a shadow's edge: TAA's jitter moves pixels across it every
+/// frame, and while the pixels outside the cone stored visibility 0, that edge counted as a
+/// penumbra (visibility 0 and 1 in turn) and drew s_max rays a frame and the widest filter.
+#[test]
+fn a_spot_cones_edge_is_no_penumbra() {
+    let ctx = common::validated_context();
+    let mut scene = builtin::soft_shadow_test();
+    scene.instances.retain(|i| i.node != 1);
+    let lamp = scene.lights[0].node as usize;
+    scene.nodes[lamp].translation = Vec3::new(0.6, 3.0, 0.4);
+    scene.nodes[lamp].rotation = glam::Quat::from_rotation_arc(Vec3::NEG_Z, Vec3::NEG_Y);
+    scene.lights[0].kind = hybrid_rt::scene::LightKind::Spot { inner_cone: 0.5, outer_cone: 0.7 };
+    // TAA on, as the CLI has it: its jitter is what moves pixels across the edge.
+    let mut r = renderer_with(&ctx, scene, Settings { taa: true, ..Default::default() });
+    common::render_frames(&mut r, 24);
+    let imgs = r
+        .read_outputs(&[passes::gbuffer::IDS, passes::shadows::filter::DV, passes::shadows::trace::SAMPLE_COUNT])
+        .unwrap();
+    // Counts are not checked: on the far floor, seen at a grazing angle, the jitter moves a
+    // pixel's depth past the reprojection's test, which restarts its count at s_max.
+    let (mut lit, mut dark, mut penumbra) = (0, 0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            if imgs[0].get_u32(x, y, 0) == u32::MAX {
+                continue;
+            }
+            let (dv, count) = (imgs[1].get(x, y, 0), imgs[2].get(x, y, 0));
+            *(if count == 0.0 { &mut dark } else { &mut lit }) += 1;
+            penumbra += usize::from(dv > 0.0);
+        }
+    }
+    eprintln!("unoccluded spot: {lit} pixels inside the cone, {dark} outside, {penumbra} taken for a penumbra");
+    // The cone's edge lies on the floor in view: pixels on both sides of it.
+    assert!(lit > 200 && dark > 200, "{lit} pixels inside the cone, {dark} outside");
+    assert_eq!(penumbra, 0, "pixels of an unoccluded spot taken for a penumbra");
+    drop(r);
+    common::assert_validation_clean(ctx);
+}
+
 /// The mean luminance of the floor points in `r`'s frame over a `base`-sized reference of
 /// `scene` (256 spp), over the whole floor and over its penumbra, where `truth` is strictly
 /// between 0.1 and 0.9.
