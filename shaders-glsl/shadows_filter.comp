@@ -8,7 +8,8 @@
 // through unfiltered.
 // dv_bar = (tent-filtered dv + raw dv) / 2: the chapter averages the raw term over 4 frames;
 // the raw dv here already spans the 4 cached frames. The pass also sums dv_bar over the image,
-// which next frame's shadows pass compares with the budget.
+// which next frame's shadows pass compares with the budget. The temporal term comes from
+// shadows_penumbra, which reads the ring anyway: a tap here reads one texel for it, not four.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
 #include "common/gbuffer.glsl"
@@ -16,24 +17,18 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 1, binding = 0, rgba16f) uniform readonly image2D in_ring0;
-layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_ring1;
-layout(set = 1, binding = 2, rgba16f) uniform readonly image2D in_ring2;
-layout(set = 1, binding = 3, rgba16f) uniform readonly image2D in_ring3;
-layout(set = 1, binding = 4, rgba16f) uniform readonly image2D in_dv_raw;
-layout(set = 1, binding = 5, rgba16f) uniform readonly image2D in_dv;
-layout(set = 1, binding = 6, rg32f) uniform readonly image2D g_depth;
-layout(set = 1, binding = 7, rgba16f) uniform readonly image2D g_normal_geo;
-layout(set = 1, binding = 8, rg32ui) uniform readonly uimage2D g_ids;
-layout(set = 1, binding = 9, rgba16f) uniform writeonly image2D out_visibility;
-layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D out_dv;      // dv_bar per light
-layout(set = 1, binding = 11, rgba16f) uniform writeonly image2D out_kernel;  // filter width per light (1..9)
-layout(set = 1, binding = 12, r32ui) uniform uimage2D out_budget;             // sum of dv_bar x 64 (texel 0,0)
+layout(set = 1, binding = 1, rgba16f) uniform readonly image2D in_mean;   // the ring's mean (shadows_penumbra)
+layout(set = 1, binding = 2, rgba16f) uniform readonly image2D in_dv_raw;
+layout(set = 1, binding = 3, rgba16f) uniform readonly image2D in_dv;
+layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_depth;
+layout(set = 1, binding = 5, rgba16f) uniform readonly image2D g_normal_geo;
+layout(set = 1, binding = 6, rg32ui) uniform readonly uimage2D g_ids;
+layout(set = 1, binding = 7, rgba16f) uniform writeonly image2D out_visibility;
+layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D out_dv;      // dv_bar per light
+layout(set = 1, binding = 9, rgba16f) uniform writeonly image2D out_kernel;  // filter width per light (1..9)
+layout(set = 1, binding = 10, r32ui) uniform uimage2D out_budget;            // sum of dv_bar x 64 (texel 0,0)
 
 #include "common/shadows_common.glsl"
-
-vec4 temporal_mean(ivec2 q) {
-    return 0.25 * (imageLoad(in_ring0, q) + imageLoad(in_ring1, q) + imageLoad(in_ring2, q) + imageLoad(in_ring3, q));
-}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -59,7 +54,7 @@ void main() {
 
     float z = imageLoad(g_depth, px).r;
     vec3 n = imageLoad(g_normal_geo, px).xyz;
-    vec4 mean = temporal_mean(px);
+    vec4 mean = imageLoad(in_mean, px);
     vec4 result = current;
     for (uint i = 0u; i < 4u; ++i) {
         if (!soft[i]) continue;
@@ -75,7 +70,7 @@ void main() {
                 if (!depth_consistent(z, imageLoad(g_depth, q).r, n)) continue;
                 if (dot(n, imageLoad(g_normal_geo, q).xyz) <= 0.9) continue;
                 float w = exp(-0.5 * float(dx * dx + dy * dy) / (sigma * sigma));
-                sum += w * temporal_mean(q)[i];
+                sum += w * imageLoad(in_mean, q)[i];
                 wsum += w;
             }
         }

@@ -20,10 +20,10 @@ pub const KERNEL: Output = Output::new(NAME, "kernel");
 pub const BUDGET: Output = Output::new(NAME, "budget");
 
 pub fn new(b: &PassBuilder, push: &Params) -> Result<FullscreenPass> {
-    let mut inputs: Vec<Input> =
-        [trace::RING0, trace::RING1, trace::RING2, trace::RING3, penumbra::DV_RAW].map(Input::texel).to_vec();
-    inputs.push(Input::texel(tent::DV_V));
-    inputs.extend([gbuffer::DEPTH, gbuffer::NORMAL_GEO, gbuffer::IDS].map(Input::texel));
+    let inputs =
+        [trace::RING0, penumbra::MEAN, penumbra::DV_RAW, tent::DV_V, gbuffer::DEPTH, gbuffer::NORMAL_GEO, gbuffer::IDS]
+            .map(Input::texel)
+            .to_vec();
     let outputs = vec![
         OutputDesc::storage(VISIBILITY, RING, Preview::Color),
         OutputDesc::storage(DV, RING, Preview::Scalar),
