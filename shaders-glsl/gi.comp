@@ -15,7 +15,7 @@
 //   (the punctual lights are shaded by composite with ray-traced shadows, the emitters and the
 //   other punctual lights resampled below: a draw that could pick one would be wasted there)
 //   and the bounce ray escaping, combined with the power heuristic;
-// - direct light from the punctual lights past the first SHADOWED_LIGHTS (composite shades those
+// - direct light from the punctual lights past the chain's (frame.chain_punctual; composite shades those
 //   with the shadows chain's visibility) and from the emissive triangles: one light per pixel
 //   resampled from candidates and last frame's choice (common/light_reservoir.glsl), whatever
 //   the number of lights; its diffuse lobe goes into the diffuse signal and its specular lobe
@@ -33,12 +33,13 @@
 //   vertex, and the cache answers at the last one. Where the cache cannot answer (a corner, a
 //   cell still empty, or the cache off) the path traces on.
 //
-// At half rate (`params.half_rate`) the pixels of a checkerboard that alternates every frame
-// are traced, and each of the others is marked for gi_fill, which gives it the mean of its
-// traced neighbours that show the same surface; a pixel without one (an edge, a thin object)
-// is traced as well. The denoiser's temporal stage then sees every pixel's own samples every
-// other frame. An untraced pixel hands its reprojected reservoir on unchanged, so a reservoir
-// gains candidates every other frame and keeps its choice in between.
+// At half rate (`params.rate` 2) the pixels of a checkerboard that alternates every frame are
+// traced, at quarter rate (4) one pixel of each 2x2 block, the four in turn
+// (common/gi_fill.glsl); each of the others is marked for gi_fill, which gives it the mean of
+// its traced neighbours that show the same surface; a pixel without one (an edge, a thin
+// object) is traced as well. The denoiser's temporal stage then sees every pixel's own samples
+// every other (fourth) frame. An untraced pixel hands its reprojected reservoir on unchanged,
+// so a reservoir gains candidates every other (fourth) frame and keeps its choice in between.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 // The shadow rays toward resampled lights teach the light grid what its cells see.
@@ -79,7 +80,7 @@ layout(push_constant) uniform Params {
     uint bounces;            // vertices traced after the primary surface before the cache answers
     uint seed;
     float roughness_cutoff;  // the reflections pass's: rougher surfaces get gi.specular
-    uint half_rate;          // 1: one pixel of each horizontal pair traced per frame (see main)
+    uint rate;               // pixels per traced pixel: 1, 2 or 4 (see main)
     uint resampled_emitters; // 0: no emitter, or every one a mesh light of the shadows chain
 } params;
 
@@ -112,7 +113,7 @@ bool has_diffuse(ivec2 px) {
 bool has_rough(ivec2 px) { return imageLoad(g_metal_rough, px).y > params.roughness_cutoff; }
 
 // Traces pixel `px`'s samples and writes its outputs but gi.light_lost, which it returns (x
-// diffuse, y specular; at half rate the untraced pixel of the pair shares it).
+// diffuse, y specular; at a reduced rate an untraced pixel shares its pair's).
 vec2 shade(ivec2 px) {
     vec4 mr = imageLoad(g_metal_rough, px);
     bool rough = has_rough(px);
@@ -260,16 +261,16 @@ vec2 shade(ivec2 px) {
     return lost;
 }
 
-// At half rate, what gi_fill needs to fill untraced pixel `px` (common/gi_fill.glsl): its traced
-// neighbours that show the same surface, and its signals. A neighbour shows it when it is the
-// same instance (two floors either side of a wall seen edge-on meet on screen at one depth and
-// normal) with the lobes this pixel gathers (its signals are zero for a lobe it lacks), the
-// shading normals are within 25 degrees, and each point lies within 1% of its depth of the
-// other's tangent plane. The specular signal is the rough lobe's, and where punctual lights
-// are resampled also their specular lobe on every surface; a neighbour on the other side of the
-// reflection cut-off would bring the rough lobe to a pixel whose reflection rays cover it, or
-// lack it. 0 where no neighbour qualifies (the pixel is traced instead) or where the pixel
-// needs no fill (no surface, or no signal to gather: shade() writes its zeros).
+// At a reduced rate, what gi_fill needs to fill untraced pixel `px` (common/gi_fill.glsl): its
+// neighbours on this frame's lattice that show the same surface, and its signals. A neighbour shows
+// it when it is the same instance (two floors either side of a wall seen edge-on meet on screen at
+// one depth and normal) with the lobes this pixel gathers (its signals are zero for a lobe it
+// lacks), the shading normals are within 25 degrees, and each point lies within 1% of its depth of
+// the other's tangent plane. The specular signal is the rough lobe's, and where punctual lights are
+// resampled also their specular lobe on every surface; a neighbour on the other side of the
+// reflection cut-off would bring the rough lobe to a pixel whose reflection rays cover it, or lack
+// it. 0 where no neighbour qualifies (the pixel is traced instead) or where the pixel needs no fill
+// (no surface, or no signal to gather: shade() writes its zeros).
 uint fill_sources(ivec2 px) {
     uint id = imageLoad(g_ids, px).x;
     bool diffuse = has_diffuse(px), rough = has_rough(px);
@@ -279,9 +280,10 @@ uint fill_sources(ivec2 px) {
     vec3 n = imageLoad(g_normal, px).xyz;
     vec3 p = world_position(px, depth);
     uint sources = 0u;
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < GI_FILL_NEIGHBOURS; ++i) {
         ivec2 q = px + GI_FILL_OFFSETS[i];
         if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(frame.size)))) continue;
+        if (!gi_fill_on_lattice(q, params.rate, frame.frame_index)) continue;
         if (imageLoad(g_ids, q).x != id || (diffuse && !has_diffuse(q)) || (specular && has_rough(q) != rough)) continue;
         vec3 nq = imageLoad(g_normal, q).xyz;
         float depth_q = imageLoad(g_depth, q).r;
@@ -301,22 +303,23 @@ void carry_reservoir(ivec2 px) {
     imageStore(out_reservoir, px, texel);
 }
 
-// At full rate one invocation per pixel. At half rate one per horizontal pair of pixels: it
-// traces the pixel on this frame's checkerboard, then marks the other for gi_fill or, where
-// that cannot fill it, traces it too. Both pixels are shaded from one call site in a loop: the
-// compute backend inlines its traversal at every call, and a second copy would lengthen a CPU
-// driver's compile.
+// At full rate one invocation per pixel. At a reduced rate one per horizontal pair of pixels:
+// it traces the pair's pixel on this frame's lattice first (at quarter rate, every other row
+// has none), then marks each other pixel for gi_fill or, where that cannot fill it, traces it
+// too. The pixels are shaded from one call site in a loop: the compute backend inlines its
+// traversal at every call, and a second copy would lengthen a CPU driver's compile.
 void main() {
-    bool half_rate = params.half_rate != 0u;
+    uint rate = params.rate;
+    bool reduced = rate > 1u;
     ivec2 g = ivec2(gl_GlobalInvocationID.xy);
-    uint parity = half_rate ? (uint(g.y) + frame.frame_index) & 1u : 0u;
-    ivec2 traced = half_rate ? ivec2(2 * g.x + int(parity), g.y) : g;
-    ivec2 filled = ivec2(2 * g.x + 1 - int(parity), g.y);
+    ivec2 first = reduced ? ivec2(2 * g.x, g.y) : g;
+    ivec2 second = first + ivec2(1, 0);
+    bool second_first = reduced && gi_fill_on_lattice(second, rate, frame.frame_index);
     vec2 lost = vec2(0.0);
-    [[dont_unroll]] for (uint k = 0u; k < (half_rate ? 2u : 1u); ++k) {
-        ivec2 px = k == 0u ? traced : filled;
+    [[dont_unroll]] for (uint k = 0u; k < (reduced ? 2u : 1u); ++k) {
+        ivec2 px = (k == 0u) != second_first ? first : second;
         if (any(greaterThanEqual(px, ivec2(frame.size)))) continue;
-        if (k == 1u) {
+        if (reduced && !gi_fill_on_lattice(px, rate, frame.frame_index)) {
             uint sources = fill_sources(px);
             if (sources != 0u) {
                 imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, -float(sources)));

@@ -1,7 +1,7 @@
 #version 460
-// gi_fill: completes gi's signals at half rate. gi traced one pixel of each pair and marked
-// the other (common/gi_fill.glsl) with the traced neighbours that show its surface; such a
-// pixel takes their mean. Every other pixel is copied. A pass of its own, not gi's second
+// gi_fill: completes gi's signals at half or quarter rate. gi traced one pixel of each pair
+// or 2x2 block and marked the others (common/gi_fill.glsl) with the traced neighbours that
+// show their surface; such a pixel takes their mean. Every other pixel is copied. A pass of its own, not gi's second
 // step through shared memory: the workgroup barrier that needed made a CPU driver compile gi
 // as a coroutine, minutes longer, and kept neighbours across workgroup edges out of reach.
 #extension GL_GOOGLE_include_directive : require
@@ -27,7 +27,7 @@ void main() {
     uint bits = uint(-radiance.a + 0.5);
     vec3 d_sum = vec3(0.0), s_sum = vec3(0.0);
     float count = 0.0;
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < GI_FILL_NEIGHBOURS; ++i) {
         if ((bits & (1u << i)) == 0u) continue;
         ivec2 q = px + GI_FILL_OFFSETS[i];
         d_sum += imageLoad(in_radiance, q).rgb;

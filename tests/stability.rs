@@ -7,11 +7,12 @@ mod common;
 
 use hybrid_rt::bench::stability::{self, Measure, Rig};
 use hybrid_rt::gpu::{Context, ShaderLibrary};
+use hybrid_rt::render::Settings;
 use std::sync::Arc;
 
 fn rig<'a>(ctx: &'a Arc<Context>, shaders: &'a ShaderLibrary) -> Rig<'a> {
     let (width, height) = stability::BOUND_SIZE;
-    Rig { ctx, shaders, backend: common::auto_backend(ctx), width, height }
+    Rig { ctx, shaders, backend: common::auto_backend(ctx), width, height, gi_rate: Settings::default().gi.rate }
 }
 
 /// Runs `scenario` denoised and raw, prints both, checks every bound and returns (denoised,

@@ -2,6 +2,7 @@
 //! per entry and scripts set them by name (`taa=off`, `s_max=8`), so both stay in step with
 //! `render::Settings` and with each other.
 
+use crate::passes::gi::GiRate;
 use crate::render::Settings;
 
 #[derive(Clone, Copy, Debug)]
@@ -129,7 +130,18 @@ pub static ALL: &[Tunable] = &[
         |s| s.gi.bounces,
         u32
     ),
-    tunable!("gi_half_rate", "GI", "trace half of the pixels a frame, fill the rest", bool, |s| s.gi.half_rate),
+    Tunable {
+        name: "gi_rate",
+        group: "GI",
+        help: "gi traces 1 of this many pixels a frame (1, 2 or 4), fills the rest",
+        kind: int(1, 4),
+        rebuild: true,
+        get: |s: &Settings| s.gi.rate.pixels() as f64,
+        // 3 is between the rates: the coarser one.
+        set: |s: &mut Settings, v: f64| {
+            s.gi.rate = GiRate::from_pixels((v as u32).next_power_of_two()).unwrap_or(s.gi.rate)
+        },
+    },
     tunable!("radiance_cache", "GI", "world-space cache of indirect light where rays end", bool, |s| s
         .radiance_cache
         .enabled),

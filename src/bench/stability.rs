@@ -15,6 +15,7 @@ use crate::gpu::{Context, ShaderLibrary};
 use crate::image_io::CpuImage;
 use crate::metrics::luminance;
 use crate::passes::gbuffer;
+use crate::passes::gi::{GiRate, GiSettings};
 use crate::passes::shadows::HARD_VISIBILITY;
 use crate::render::{CameraChoice, RenderMode, Renderer, Settings, ViewOverride};
 use crate::scene::Scene;
@@ -39,6 +40,9 @@ pub struct Rig<'a> {
     pub backend: Backend,
     pub width: u32,
     pub height: u32,
+    /// The shipped frame's gi rate (`bench stability --gi-rate`; the bounds were measured at
+    /// the default, half).
+    pub gi_rate: GiRate,
 }
 
 /// One number a scenario measured.
@@ -179,6 +183,7 @@ fn renderer(rig: &Rig, scene: Scene, denoised: bool, start_time: f32, camera: us
         taa: denoised,
         frame_dt: FRAME_DT,
         start_time,
+        gi: GiSettings { rate: rig.gi_rate, ..Default::default() },
         ..Default::default()
     };
     Renderer::new(rig.ctx, rig.shaders, scene, settings, &CameraChoice::Index(camera), rig.backend)

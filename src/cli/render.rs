@@ -7,19 +7,11 @@ use crate::bench;
 use crate::capture::Capture;
 use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
+use crate::passes::gi::GiRate;
 use crate::render::{self, CameraChoice, Renderer, Settings};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
-
-/// `--gi-rate`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum GiRate {
-    /// Every pixel every frame.
-    Full,
-    /// Half of the pixels each frame.
-    Half,
-}
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -58,8 +50,9 @@ pub struct RenderArgs {
     /// off: the bounces traced).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=8))]
     gi_bounces: Option<u32>,
-    /// How many of the pixels gi traces each frame: `full`, or `half` (a checkerboard that
-    /// alternates every frame; the others are filled from their neighbours).
+    /// How many of the pixels gi traces each frame: `full`, `half` (the default: a checkerboard
+    /// that alternates every frame) or `quarter` (one pixel of each 2x2 block, each in turn);
+    /// the others are filled from their neighbours.
     #[arg(long, value_enum, value_name = "RATE")]
     gi_rate: Option<GiRate>,
     /// Turn the radiance cache off: gi and reflection rays trace a few bounces on instead of
@@ -141,7 +134,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         settings.gi.bounces = b;
     }
     if let Some(rate) = a.gi_rate {
-        settings.gi.half_rate = rate == GiRate::Half;
+        settings.gi.rate = rate;
     }
     settings.radiance_cache.enabled = !a.no_radiance_cache;
     if let Some(b) = a.cache_budget {

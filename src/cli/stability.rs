@@ -6,6 +6,7 @@ use crate::backend;
 use crate::bench::{self, stability};
 use crate::gpu::{Context, ContextOptions, ShaderLibrary, finish_validation};
 use crate::image_io;
+use crate::passes::gi::GiRate;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -26,6 +27,10 @@ pub struct StabilityArgs {
     /// Replace an existing output file.
     #[arg(long)]
     force: bool,
+    /// gi's rate in the shipped frame, as `render --gi-rate` (the bounds were measured at the
+    /// default).
+    #[arg(long, value_enum, value_name = "RATE", default_value = "half")]
+    gi_rate: GiRate,
 }
 
 pub fn run(a: &StabilityArgs) -> Result<()> {
@@ -36,7 +41,7 @@ pub fn run(a: &StabilityArgs) -> Result<()> {
     let (picked, why) = backend::resolve(&ctx.caps, a.gpu.backend)?;
     log::info!("ray backend: {} ({why})", picked.variant());
     let shaders = ShaderLibrary::embedded();
-    let rig = stability::Rig { ctx: &ctx, shaders: &shaders, backend: picked, width, height };
+    let rig = stability::Rig { ctx: &ctx, shaders: &shaders, backend: picked, width, height, gi_rate: a.gi_rate };
     if let Some(name) = &a.scenario
         && !stability::SCENARIOS.iter().any(|(n, _)| n == name)
     {

@@ -85,7 +85,7 @@ pub struct FullscreenPass {
     /// Workgroups to dispatch; None: one invocation per `pixels_per_invocation` of the frame.
     pub groups: Option<[u32; 3]>,
     /// Pixels (across, down) one invocation covers when `groups` is None: [1, 1] but for a
-    /// shader that shades part of the frame (gi at half rate).
+    /// shader that shades part of the frame (gi at a reduced rate).
     pub pixels_per_invocation: [u32; 2],
 }
 

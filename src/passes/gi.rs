@@ -2,7 +2,7 @@
 //! radiance cache at its hit for every further bounce, demodulated by the diffuse albedo
 //! (shaders-glsl/gi.comp). It also shades the emissive triangles and the punctual lights past
 //! the shadowed ones, one resampled per pixel with a reservoir kept across frames
-//! (common/light_reservoir.glsl). At half rate gi_fill completes its signals.
+//! (common/light_reservoir.glsl). At half or quarter rate gi_fill completes its signals.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
@@ -18,7 +18,7 @@ use bytemuck::{Pod, Zeroable};
 pub const NAME: &str = "gi";
 /// Demodulated diffuse radiance: direct light from the environment and the resampled lights
 /// (emitters and punctual lights past the shadowed ones), and indirect.
-/// At half rate the untraced pixels are black, with what gi_fill needs in alpha.
+/// At a reduced rate the untraced pixels are black, with what gi_fill needs in alpha.
 pub const RADIANCE: Output = Output::new(NAME, "radiance");
 /// The specular lobe of surfaces rougher than the reflection cut-off, from the same samples;
 /// on every surface, the resampled punctual lights' share of it.
@@ -40,7 +40,8 @@ pub struct Params {
     pub bounces: u32,
     pub seed: u32,
     pub roughness_cutoff: f32,
-    pub half_rate: u32,
+    /// GiRate::pixels: 1, 2 or 4.
+    pub rate: u32,
     /// 0: no emissive triangle is left to the reservoirs (none, or all in the shadows chain's
     /// mesh lights).
     pub resampled_emitters: u32,
@@ -51,15 +52,41 @@ pub struct GiSettings {
     /// Path vertices traced after the primary surface before the radiance cache answers (1:
     /// the cache answers at the bounce ray's hit); with the cache off, the bounces traced.
     pub bounces: u32,
-    /// Trace half of the pixels each frame, on a checkerboard that alternates, and fill the
-    /// others from their traced neighbours (gi.comp, then gi_fill); an untraced pixel hands its
-    /// resampled lights' reservoir on as it was.
-    pub half_rate: bool,
+    /// Which pixels are traced each frame; gi_fill fills the others from their traced
+    /// neighbours, and an untraced pixel hands its resampled lights' reservoir on as it was.
+    pub rate: GiRate,
+}
+
+/// How many of the pixels gi traces each frame (`--gi-rate`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum GiRate {
+    /// Every pixel every frame.
+    Full,
+    /// Half: a checkerboard that alternates every frame.
+    Half,
+    /// A quarter: one pixel of each 2x2 block, each in turn over four frames.
+    Quarter,
+}
+
+impl GiRate {
+    /// The pixels per traced pixel: 1, 2 or 4.
+    pub fn pixels(self) -> u32 {
+        match self {
+            GiRate::Full => 1,
+            GiRate::Half => 2,
+            GiRate::Quarter => 4,
+        }
+    }
+
+    /// The rate of `pixels` per traced pixel, if it is one.
+    pub fn from_pixels(pixels: u32) -> Option<Self> {
+        [GiRate::Full, GiRate::Half, GiRate::Quarter].into_iter().find(|r| r.pixels() == pixels)
+    }
 }
 
 impl Default for GiSettings {
     fn default() -> Self {
-        Self { bounces: 1, half_rate: true }
+        Self { bounces: 1, rate: GiRate::Half }
     }
 }
 
@@ -72,7 +99,7 @@ pub struct Signals {
     pub specular: Output,
 }
 
-/// gi, and gi_fill after it at half rate.
+/// gi, and gi_fill after it at a reduced rate.
 /// `roughness_cutoff`: the reflections pass's; gi estimates the specular lobe above it.
 /// `reservoirs`: whether the plan leaves lights to gi's reservoirs (frame-sized then);
 /// `resampled_emitters`: whether some of them are emissive triangles.
@@ -103,21 +130,25 @@ pub fn new(
         reservoir_size(OutputDesc::storage(RESERVOIR, RESERVOIR_FORMAT, Preview::Scalar), reservoirs),
         reservoir_size(OutputDesc::storage(LIGHT_LOST, vk::Format::R32G32_SFLOAT, Preview::Color), reservoirs),
     ];
-    if s.half_rate {
-        log::info!(
+    match s.rate {
+        GiRate::Full => {}
+        GiRate::Half => log::info!(
             "gi: half of the pixels traced each frame (a checkerboard), the others filled from their neighbours"
-        );
+        ),
+        GiRate::Quarter => log::info!(
+            "gi: a quarter of the pixels traced each frame (one of each 2x2 block), the others filled from their neighbours"
+        ),
     }
     let push = Params {
         bounces: s.bounces.max(1),
         seed,
         roughness_cutoff,
-        half_rate: s.half_rate.into(),
+        rate: s.rate.pixels(),
         resampled_emitters: resampled_emitters.into(),
     };
     let mut gi =
         FullscreenPass::with_buffers(b, NAME, &b.traced_shader("gi.comp"), inputs, outputs, cache.buffers(), &push)?;
-    if !s.half_rate {
+    if s.rate == GiRate::Full {
         return Ok(Signals { passes: vec![Box::new(gi)], radiance: RADIANCE, specular: SPECULAR });
     }
     gi.pixels_per_invocation = [2, 1];

@@ -150,7 +150,10 @@ pub fn pick_for_render(
         sweep.frames,
         path.display()
     );
-    Ok((p.config, why))
+    // The name, not the stored settings: it says the gi rate in sweeps cached before the rate
+    // had three values.
+    let config = p.name.parse().unwrap_or(p.config);
+    Ok((config, why))
 }
 
 /// Sizes at which a sweep of this scene, camera, backend and device is cached.

@@ -1,6 +1,7 @@
 //! The configurations a sweep renders: each one a short name (`d4-s3-b1-r1`) that parses to
 //! and prints from the frame settings it changes.
 
+use crate::passes::gi::GiRate;
 use crate::render::Settings;
 use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
@@ -8,8 +9,8 @@ use serde::{Deserialize, Serialize};
 /// One configuration of the hybrid frame. Its name lists the settings as letter + number,
 /// joined by `-`: `d` SVGF à-trous iterations (0 = denoiser off), `s` shadow rays per pixel
 /// and area light at most (s_max), `b` GI bounces, `r` reflection rays per pixel, `t0`
-/// when TAA is off, `c0` when the radiance cache is off, `g2`/`g1` when gi traces half of the
-/// pixels each frame or all of them (against the default), and `f1` when every pass runs
+/// when TAA is off, `c0` when the radiance cache is off, `g1`/`g2`/`g4` when gi traces all of
+/// the pixels each frame, half or a quarter of them (against the default), and `f1` when every pass runs
 /// instead of the scene's frame plan (src/render/plan.rs): a pair differing only in `f` shows
 /// what the plan saves and costs. Settings left out of a name take the defaults
 /// (`d4-s3-b1-r1`, TAA on: the renderer's defaults, and what `hybrid-rt render` draws).
@@ -26,9 +27,11 @@ pub struct Config {
     /// The radiance cache (sweeps cached before it existed had none).
     #[serde(default)]
     pub cache: bool,
-    /// gi traces half of the pixels per frame (`g2`) instead of all (`g1`).
-    #[serde(default)]
-    pub gi_half_rate: bool,
+    /// gi traces one of this many pixels per frame: 1, 2 or 4 (GiRate::pixels; `g1`, `g2`,
+    /// `g4`). Sweeps cached before it had a bool in its place (`gi_half_rate`), which is
+    /// ignored; their points' names say the rate.
+    #[serde(default = "default_gi_rate")]
+    pub gi_rate: u32,
 }
 
 impl Default for Config {
@@ -42,9 +45,13 @@ impl Default for Config {
             taa: true,
             full: false,
             cache: s.radiance_cache.enabled,
-            gi_half_rate: s.gi.half_rate,
+            gi_rate: s.gi.rate.pixels(),
         }
     }
+}
+
+fn default_gi_rate() -> u32 {
+    Settings::default().gi.rate.pixels()
 }
 
 impl std::fmt::Display for Config {
@@ -60,8 +67,8 @@ impl std::fmt::Display for Config {
         if !self.cache {
             write!(f, "-c0")?;
         }
-        if self.gi_half_rate != Settings::default().gi.half_rate {
-            write!(f, "-g{}", if self.gi_half_rate { 2 } else { 1 })?;
+        if self.gi_rate != default_gi_rate() {
+            write!(f, "-g{}", self.gi_rate)?;
         }
         if self.full {
             write!(f, "-f1")?;
@@ -99,10 +106,12 @@ impl std::str::FromStr for Config {
                     continue;
                 }
                 "g" => {
-                    if !(1..=2).contains(&n) {
-                        bail!("configuration '{s}': g takes 1 (gi traces every pixel) or 2 (half of them a frame)");
+                    if GiRate::from_pixels(n).is_none() {
+                        bail!(
+                            "configuration '{s}': g takes 1 (gi traces every pixel), 2 (half of them a frame) or 4 (a quarter)"
+                        );
                     }
-                    c.gi_half_rate = n == 2;
+                    c.gi_rate = n;
                     continue;
                 }
                 "f" => {
@@ -114,7 +123,7 @@ impl std::str::FromStr for Config {
                 }
                 _ => bail!(
                     "configuration '{s}': unknown setting '{key}' (d: denoiser iterations, s: shadow s_max, \
-                     b: GI bounces, r: reflection rays, t: TAA 0/1, c: radiance cache 0/1, g: gi rate 1/2, f: every pass 0/1)"
+                     b: GI bounces, r: reflection rays, t: TAA 0/1, c: radiance cache 0/1, g: gi rate 1/2/4, f: every pass 0/1)"
                 ),
             };
             if !range.contains(&n) {
@@ -139,7 +148,7 @@ impl Config {
         s.taa = self.taa;
         s.full = self.full;
         s.radiance_cache.enabled = self.cache;
-        s.gi.half_rate = self.gi_half_rate;
+        s.gi.rate = GiRate::from_pixels(self.gi_rate).unwrap_or(s.gi.rate);
     }
 }
 
@@ -158,6 +167,7 @@ pub const DEFAULT_CONFIGS: &[&str] = &[
     "d4-s3-b1-r1",    // the renderer's defaults
     "d4-s3-b1-r1-f1", // the same with every pass: what the frame plan saves and costs
     "d4-s3-b1-r1-g1", // the same with gi tracing every pixel every frame
+    "d4-s3-b1-r1-g4", // ... and a quarter of them
     "d4-s3-b1-r1-t0",
     "d4-s1-b1-r1",
     "d4-s5-b1-r1", // the chapter's standard tier, the default until 2026-12-06
@@ -190,9 +200,10 @@ mod tests {
         assert_eq!("s8-t0".parse::<Config>().unwrap().to_string(), "d4-s8-b1-r1-t0");
         assert_eq!("b8-c0".parse::<Config>().unwrap().to_string(), "d4-s3-b8-r1-c0");
         assert!(!"c0".parse::<Config>().unwrap().cache && "c1".parse::<Config>().unwrap().cache);
-        // Half-rate gi is the default: only full rate shows in a name.
-        assert!(!"g1".parse::<Config>().unwrap().gi_half_rate && "g2".parse::<Config>().unwrap().gi_half_rate);
+        // Half-rate gi is the default: only full and quarter rate show in a name.
+        assert_eq!(["g1", "g2", "g4"].map(|g| g.parse::<Config>().unwrap().gi_rate), [1, 2, 4]);
         assert_eq!("g2".parse::<Config>().unwrap().to_string(), "d4-s3-b1-r1");
+        assert_eq!("g4".parse::<Config>().unwrap().to_string(), "d4-s3-b1-r1-g4");
         assert_eq!("c0-g1".parse::<Config>().unwrap().to_string(), "d4-s3-b1-r1-c0-g1");
         for bad in ["x3", "d", "d-1", "s0", "d9", "t2", "c2", "g0", "g3", "", "d4s5"] {
             assert!(bad.parse::<Config>().is_err(), "{bad} should not parse");
@@ -208,5 +219,7 @@ mod tests {
         "d2".parse::<Config>().unwrap().apply(&mut s);
         assert!(s.denoiser && s.taa);
         assert_eq!(s.denoise.iterations, 2);
+        "g4".parse::<Config>().unwrap().apply(&mut s);
+        assert_eq!(s.gi.rate, GiRate::Quarter);
     }
 }
