@@ -1,9 +1,9 @@
 #version 460
 // composite: the hybrid frame in linear HDR radiance. Per G-buffer pixel:
 //   emission
-// + the first SHADOWED_LIGHTS punctual lights (Lambert + GGX), and the mesh lights in the
-//   channels they leave free (common/mesh_lights.glsl), times their ray-traced visibility (the
-//   shadows chain, one channel each; coloured by shadows.tint where tinted glass is on the way)
+// + the lights of the shadows chain's four channels: the first frame.chain_punctual punctual
+//   lights (Lambert + GGX), then the mesh lights (common/mesh_lights.glsl), times their
+//   ray-traced visibility (coloured by shadows.tint where tinted glass is on the way)
 // + the diffuse signal (gi: the other emitters, environment, the other punctual lights
 //   resampled, every bounce; demodulated) times the diffuse albedo
 // + the specular signal (reflections, with gi's specular lobe of the resampled lights, and
@@ -118,9 +118,9 @@ void main() {
     vec4 vis = imageLoad(in_visibility, px);
     uvec4 tint = cp.tinted != 0u ? imageLoad(in_tint, px) : uvec4(0u);
     vec3 radiance = imageLoad(g_emissive, px).rgb;
-    for (uint i = 0u; i < SHADOWED_LIGHTS; ++i) {
+    for (uint i = 0u; i < 4u; ++i) {  // the chain's channels (shadows_common.glsl's SHADOW_LIGHTS)
         vec3 through = vis[i] * shadow_tint_decode(tint[i]);
-        if (i < frame.light_count) {
+        if (i < frame.chain_punctual) {
             LightSample ls = sample_punctual(lights[i], p);
             radiance += reflection_eval_cos(lit, transmission, n, v, ls.dir) * ls.radiance * through;
         } else if (cp.mesh_triangles[i] > 0u) {

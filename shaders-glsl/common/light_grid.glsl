@@ -157,7 +157,7 @@ uint light_grid_pick(uint index, uvec2 cell, float u, out float pmf, out float s
 bool light_grid_visibility_key(vec3 p, uint light, out uint key) {
     key = 0u;
     uint index;
-    if (light < SHADOWED_LIGHTS || light == NO_LIGHT || !light_grid_cell_index(p, index)) return false;
+    if (light < frame.chain_punctual || light == NO_LIGHT || !light_grid_cell_index(p, index)) return false;
     uvec2 cell = light_grid_cells[index];
     if (cell.y == 0u) return false;
     uint lo = cell.x;

@@ -1,4 +1,4 @@
-// Direct light from the punctual lights past the first SHADOWED_LIGHTS and from the emissive
+// Direct light from the punctual lights past the chain's (frame.chain_punctual) and from the emissive
 // triangles, whatever their number: resampled importance sampling with a per-pixel reservoir
 // kept across frames (the candidate and temporal steps of ReSTIR DI, Bitterli et al. 2020).
 // gi.comp drives it and traces its shadow rays.
@@ -60,7 +60,7 @@ struct LightReservoir {
 LightReservoir reservoir_empty() { return LightReservoir(NO_LIGHT, vec2(0.0), 0.0, 0.0, 0.0); }
 
 // Whether some punctual light is left to resampling.
-bool resampled_lights_present() { return frame.light_count > SHADOWED_LIGHTS && light_table.entry_count > 0u; }
+bool resampled_lights_present() { return frame.light_count > frame.chain_punctual && light_table.entry_count > 0u; }
 
 // The emissive triangles' share of the light table's power (0: none emits).
 float emitter_share() {
@@ -80,7 +80,7 @@ bool reservoirs_present(bool emitters) { return resampled_lights_present() || (e
 bool reservoir_emitter(uint light) {
     return light >= light_table.first_emitter_entry && light < light_table.env_entry;
 }
-bool reservoir_punctual(uint light) { return light >= SHADOWED_LIGHTS && light < frame.light_count; }
+bool reservoir_punctual(uint light) { return light >= frame.chain_punctual && light < frame.light_count; }
 
 // The shading point a reservoir is evaluated at.
 struct ShadingPoint {

@@ -317,7 +317,7 @@ uint light_entry_search(float u) {
 }
 
 // Where a shading point draws the resampled punctual lights (those past the shadowed ones;
-// the table's entries SHADOWED_LIGHTS.. in light order) from: its cell of the light grid, or,
+// the table's entries frame.chain_punctual.. in light order) from: its cell of the light grid, or,
 // outside the grid, their sub-range [lo, hi) of the table's CDF. Only where such lights exist.
 struct ResampledLights {
     bool in_grid;
@@ -331,7 +331,7 @@ ResampledLights resampled_lights_at(vec3 p) {
     ResampledLights r;
     r.in_grid = light_grid_cell_index(p, r.cell_index);
     r.cell = r.in_grid ? light_grid_cells[r.cell_index] : uvec2(0u);
-    r.lo = light_entries[SHADOWED_LIGHTS - 1u].cdf;
+    r.lo = frame.chain_punctual > 0u ? light_entries[frame.chain_punctual - 1u].cdf : 0.0;
     r.hi = light_entries[frame.light_count - 1u].cdf;
     return r;
 }
@@ -346,7 +346,7 @@ uint resampled_light_pick(ResampledLights r, float u, out float pmf, out float s
     if (!(r.hi > r.lo)) return NO_LIGHT;  // the resampled lights have no power
     uint entry = light_entry_search(r.lo + u * (r.hi - r.lo));
     // Rounding can put lo + u (hi - lo) on hi itself; such a draw selects nothing.
-    if (entry < SHADOWED_LIGHTS || entry >= frame.light_count) return NO_LIGHT;
+    if (entry < frame.chain_punctual || entry >= frame.light_count) return NO_LIGHT;
     pmf = light_entries[entry].pmf / (r.hi - r.lo);
     return entry;
 }
@@ -355,7 +355,7 @@ uint resampled_light_pick(ResampledLights r, float u, out float pmf, out float s
 NeeSample light_sample(vec3 p, vec3 u) {
     if (light_table.entry_count == 0u) return nee_none();
     LightEntry e = light_entries[light_entry_search(u.x)];
-    if (e.kind == LIGHT_KIND_PUNCTUAL && e.index >= SHADOWED_LIGHTS) {
+    if (e.kind == LIGHT_KIND_PUNCTUAL && e.index >= frame.chain_punctual) {
         // A resampled light: chosen again among them, from p's cell of the grid, with what is
         // left of u.x (uniform in [lo, hi) on this branch). The probability of the resampled
         // lights as a whole, hi - lo, stays as the table has it, so the other lights' densities

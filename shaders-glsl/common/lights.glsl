@@ -6,10 +6,7 @@
 
 #include "scene.glsl"
 
-// Lights 0..SHADOWED_LIGHTS-1 have their own ray-traced visibility (the shadows chain, one
-// channel each, added by composite); the rest are resampled in gi (common/light_reservoir.glsl).
-// Rust: passes::shadows::MAX_SHADOWED_LIGHTS.
-#define SHADOWED_LIGHTS 4u
+// Which lights have the shadows chain and which are resampled: frame.chain_punctual.
 
 struct LightSample {
     vec3 dir;       // from the surface toward the light

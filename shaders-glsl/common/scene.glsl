@@ -102,6 +102,10 @@ layout(set = 0, binding = 0, scalar) uniform FrameUniforms {
     uint instance_count;
     uint flags;  // FRAME_*
     vec2 prev_jitter;  // last frame's `jitter` (the G-buffer's texels sat at centre - jitter then)
+    // Lights 0..chain_punctual-1 have their own ray-traced visibility (the shadows chain, one
+    // channel each, added by composite; at most 4, mesh lights take the channels after them);
+    // the rest are resampled in gi (common/light_reservoir.glsl). Rust: FramePlan::chain_punctual.
+    uint chain_punctual;
 } frame;
 
 // Set on the first frame and after a camera cut: temporal passes start their history anew.

@@ -1,7 +1,7 @@
 // Shared by the adaptive soft-shadow passes (shadows, shadows_penumbra, shadows_tent_h/_v,
 // shadows_filter), after Ray Tracing Gems ch. 13 (Boksansky, Wimmer, Bittner): visibility of
-// up to four lights, one per RGBA channel: the punctual lights first, then mesh lights in the
-// channels they leave free (common/mesh_lights.glsl). Punctual lights with a radius (sphere for
+// up to four lights, one per RGBA channel: the punctual lights first, then mesh lights
+// (common/mesh_lights.glsl), the four brightest of both (world::lights::chain_lights). Punctual lights with a radius (sphere for
 // point lights, disk for spots) and mesh lights are area lights and get adaptive sample counts,
 // filtering and a 4-frame history; punctual lights without one are hard: one ray, no
 // filtering.
@@ -25,7 +25,7 @@ layout(push_constant) uniform ShadowParams {
 } sp;
 
 // The channels of the punctual lights (the first ones).
-uint punctual_channels() { return min(frame.light_count, uint(SHADOW_LIGHTS)); }
+uint punctual_channels() { return frame.chain_punctual; }
 
 // Which channels are soft (a punctual light with a radius, or a mesh light): a bool each.
 bvec4 soft_lights() {

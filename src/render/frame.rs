@@ -36,7 +36,7 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         passes.push(Box::new(passes::primary_rays::new(b)?));
     }
     let extent = crate::gpu::vk::Extent2D { width: settings.width, height: settings.height };
-    let mesh_lights = passes::shadows::MeshLights::new(plan.light_order.len(), &plan.chain_emitters);
+    let mesh_lights = passes::shadows::MeshLights::new(plan.chain_punctual, &plan.chain_emitters);
     let shadows =
         passes::shadows::chain(b, &settings.shadows, extent, plan.soft_shadows, plan.tinted_shadows, mesh_lights)?;
     passes.extend(shadows.passes);

@@ -248,7 +248,10 @@ impl Renderer {
             &environment,
             settings.brdf,
             settings.light_grid,
-            &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
+            crate::world::lights::ChainLights {
+                punctual: plan.chain_punctual,
+                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
+            },
         )?;
         let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
         let parts = frame_parts(&b, &settings, &plan)?;
@@ -455,6 +458,7 @@ impl Renderer {
             flags: if reset { scene_gpu::FRAME_RESET_HISTORY } else { 0 }
                 | if self.scene_gpu.lights_changed { scene_gpu::FRAME_LIGHTS_CHANGED } else { 0 },
             prev_jitter: self.prev_jitter,
+            chain_punctual: self.plan.chain_punctual as u32,
         }
     }
 

@@ -37,15 +37,18 @@ pub struct FramePlan {
     /// Indices into the scene's lights that cannot reach any geometry.
     pub culled_lights: Vec<usize>,
     /// The lights the renderer keeps, as indices into the scene's, in the order it shades them
-    /// (world::lights::shading_order): the first MAX_SHADOWED_LIGHTS get the shadows chain.
+    /// (world::lights::shading_order): the first `chain_punctual` get the shadows chain.
     pub light_order: Vec<usize>,
+    /// How many punctual lights have a channel of the shadows chain: of the punctual and mesh
+    /// lights, the MAX_SHADOWED_LIGHTS brightest get one (world::lights::chain_lights).
+    pub chain_punctual: usize,
     /// Lights past the per-light-shadowed ones, resampled in gi.
     pub resampled_lights: usize,
     /// Emissive triangles, resampled in gi with those lights (those of the chain's mesh lights
     /// left out).
     pub emitters: u32,
     /// The mesh lights that take the shadows chain's channels after the punctual lights
-    /// (world::lights::chain_emitters): (instance, first emitter, triangles).
+    /// (world::lights::chain_lights): (instance, first emitter, triangles).
     pub chain_emitters: Vec<(u32, u32, u32)>,
     /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
     /// cells by it.
@@ -63,18 +66,20 @@ impl FramePlan {
 
     /// Everything on (`--full`); `mesh_lights` as in [`FramePlan::for_scene`].
     pub fn full(scene: &Scene, mesh_lights: bool) -> Self {
-        let light_order = crate::world::lights::shading_order(scene, &[], MAX_SHADOWED_LIGHTS);
-        let chain_emitters = chain_emitters(scene, light_order.len(), mesh_lights);
+        let kept: Vec<usize> = (0..scene.lights.len()).collect();
+        let (chain_punctual, chain_emitters) = crate::world::lights::chain_lights(scene, &kept, mesh_lights);
+        let light_order = crate::world::lights::shading_order(scene, &[], chain_punctual);
         Self {
             reflections: true,
             soft_shadows: true,
             tinted_shadows: true,
             gi: true,
             culled_lights: Vec::new(),
-            resampled_lights: light_order.len().saturating_sub(MAX_SHADOWED_LIGHTS),
+            resampled_lights: light_order.len() - chain_punctual,
             emitters: crate::world::lights::emitter_bases(scene).1 - chain_triangles(&chain_emitters),
             chain_emitters,
             light_order,
+            chain_punctual,
             scene_diagonal: scene_diagonal(scene),
             reasons: vec!["--full: every pass runs".into()],
         }
@@ -111,11 +116,12 @@ impl FramePlan {
         });
 
         let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
-        let light_order = crate::world::lights::shading_order(scene, &culled_lights, MAX_SHADOWED_LIGHTS);
-        let shadowed = &light_order[..light_order.len().min(MAX_SHADOWED_LIGHTS)];
+        let kept: Vec<usize> = (0..scene.lights.len()).filter(|i| !culled_lights.contains(i)).collect();
+        let (chain_punctual, chain_emitters) = crate::world::lights::chain_lights(scene, &kept, mesh_lights);
+        let light_order = crate::world::lights::shading_order(scene, &culled_lights, chain_punctual);
+        let shadowed = &light_order[..chain_punctual];
         let mut soft: Vec<&str> =
             shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
-        let chain_emitters = chain_emitters(scene, light_order.len(), mesh_lights);
         let mesh_lights: Vec<&str> = chain_emitters.iter().map(|&(i, ..)| instance_name(scene, i)).collect();
         soft.extend(&mesh_lights);
         let soft_shadows = !soft.is_empty();
@@ -152,6 +158,15 @@ impl FramePlan {
         let resampled_lights = light_order.len() - shadowed.len();
         reasons.push(if resampled_lights > 0 {
             let names: Vec<&str> = shadowed.iter().map(|&i| scene.lights[i].name.as_str()).collect();
+            let kept = if shadowed.is_empty() {
+                "none keeps a visibility of its own (brighter mesh lights hold the shadows chain)".to_string()
+            } else {
+                format!(
+                    "the {} brightest ({}) keep a visibility of their own (exact, noise-free)",
+                    shadowed.len(),
+                    list(&names)
+                )
+            };
             let source = if light_grid {
                 "drawn from a light grid (a cell lists the lights that reach it, weighed by what they can \
                  bring there and by how often gi's shadow rays from the cell reach their group of lights: \
@@ -160,14 +175,11 @@ impl FramePlan {
                 "drawn by power from all of them (--no-light-grid: no grid, nothing learned)"
             };
             format!(
-                "many lights: {} punctual lights; the {} brightest ({}) keep a visibility of their own \
-                 (exact, noise-free); the other {resampled_lights} are resampled in gi: per pixel one light \
-                 from {} candidates {source} and last frame's choice, weighted by its unshadowed \
-                 contribution{}, with shadow rays (ReSTIR-style temporal reuse); the cost per pixel does \
-                 not grow with the number of lights",
+                "many lights: {} punctual lights; {kept}; the other {resampled_lights} are resampled in gi: \
+                 per pixel one light from {} candidates {source} and last frame's choice, weighted by its \
+                 unshadowed contribution{}, with shadow rays (ReSTIR-style temporal reuse); the cost per pixel \
+                 does not grow with the number of lights",
                 light_order.len(),
-                shadowed.len(),
-                list(&names),
                 RIS_CANDIDATES,
                 if light_grid { " and that visibility" } else { "" },
             )
@@ -181,9 +193,10 @@ impl FramePlan {
 
         if !mesh_lights.is_empty() {
             reasons.push(format!(
-                "mesh lights: {} emissive mesh(es) of at most {} triangles take the shadows chain's free \
-                 channel(s) (composite integrates their unshadowed light exactly, the chain's adaptive \
-                 shadow rays give the share that arrives, gi's reservoirs leave them out): {}",
+                "mesh lights: {} emissive mesh(es) of at most {} triangles take shadows chain channel(s), \
+                 ranked with the punctual lights by the light they emit (composite integrates their \
+                 unshadowed light exactly, the chain's adaptive shadow rays give the share that arrives, \
+                 gi's reservoirs leave them out): {}",
                 mesh_lights.len(),
                 crate::world::lights::MAX_CHAIN_EMITTER_TRIANGLES,
                 list(&mesh_lights)
@@ -229,6 +242,7 @@ impl FramePlan {
             gi,
             culled_lights,
             light_order,
+            chain_punctual,
             resampled_lights,
             emitters,
             chain_emitters,
@@ -239,10 +253,6 @@ impl FramePlan {
 }
 
 /// The mesh lights (world::lights::chain_emitters), none when they are off.
-fn chain_emitters(scene: &Scene, punctual: usize, mesh_lights: bool) -> Vec<(u32, u32, u32)> {
-    if mesh_lights { crate::world::lights::chain_emitters(scene, punctual) } else { Vec::new() }
-}
-
 fn chain_triangles(chain: &[(u32, u32, u32)]) -> u32 {
     chain.iter().map(|c| c.2).sum()
 }
@@ -421,6 +431,7 @@ mod tests {
         let p = FramePlan::for_scene(&s, 0.6, true, true);
         // (The camera room's highest lights reach no surface with their short range: culled.)
         assert_eq!(p.light_order.len(), s.lights.len() - p.culled_lights.len());
+        assert_eq!(p.chain_punctual, MAX_SHADOWED_LIGHTS);
         assert_eq!(p.resampled_lights, p.light_order.len() - MAX_SHADOWED_LIGHTS);
         assert!(p.resampled_lights > 250, "{:?}", p.reasons);
         let line = p.reasons.iter().find(|r| r.starts_with("many lights")).expect("no many-lights line");

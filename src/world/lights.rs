@@ -40,8 +40,9 @@ use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
-/// Lights 0..SHADOWED_LIGHTS (in `shading_order`) have a visibility of their own from the
-/// shadows chain; the rest are resampled. Mirrors SHADOWED_LIGHTS in common/lights.glsl.
+/// The shadows chain's channels: the punctual and mesh lights that emit the most light take one
+/// each (`chain_lights`), the punctual ones first in `shading_order`; the other punctual lights
+/// are resampled. Mirrors SHADOW_LIGHTS in common/shadows_common.glsl.
 pub const SHADOWED_LIGHTS: usize = 4;
 
 pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
@@ -149,6 +150,8 @@ pub struct LightTables {
     emissive: Vec<u32>,
     /// The instances that are mesh lights of the shadows chain (the frame plan's).
     chain: Vec<u32>,
+    /// The punctual lights with a channel of the chain, which the grid leaves out.
+    chain_punctual: usize,
     built_for: Option<Vec<Mat4>>,
     /// Powers of the punctual lights and of the environment (fixed for the scene).
     punctual_powers: Vec<f32>,
@@ -166,7 +169,7 @@ impl LightTables {
         pose: &Pose,
         env: &EnvironmentData,
         grid_enabled: bool,
-        chain: &[u32],
+        chain: ChainLights,
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let (bases, emitter_count) = emitter_bases(scene);
@@ -200,7 +203,14 @@ impl LightTables {
         // (None with the grid off: it stays empty.)
         let grid_at_load = grid_enabled.then(|| {
             let (lights, bounds) = (super::scene_gpu::gpu_lights(scene, pose), scene.bounds(pose));
-            let grid = build_grid(&lights, &punctual_powers, bounds, light_grid::MAX_ENTRIES, emitter_count > 0);
+            let grid = build_grid(
+                &lights,
+                &punctual_powers,
+                chain.punctual,
+                bounds,
+                light_grid::MAX_ENTRIES,
+                emitter_count > 0,
+            );
             (lights, bounds, grid)
         });
         let at_load_entries = grid_at_load.as_ref().map_or(0, |(_, _, grid)| grid.entries.len());
@@ -242,7 +252,8 @@ impl LightTables {
             grid_at_load,
             grid_enabled,
             emissive: emissive_instances(scene),
-            chain: chain.to_vec(),
+            chain: chain.meshes.to_vec(),
+            chain_punctual: chain.punctual,
             built_for: None,
             punctual_powers,
             env_power: 4.0 * PI * PI * radius * radius * luminance(env.mean),
@@ -286,13 +297,20 @@ impl LightTables {
             {
                 grid
             }
-            _ => build_grid(lights, &self.punctual_powers, bounds, self.grid_capacity, !self.emissive.is_empty()),
+            _ => build_grid(
+                lights,
+                &self.punctual_powers,
+                self.chain_punctual,
+                bounds,
+                self.grid_capacity,
+                !self.emissive.is_empty(),
+            ),
         };
         log::debug!(
             "light grid: {:?} cells, {} entries for {} resampled lights",
             grid.header.dims,
             grid.entries.len(),
-            lights.len().saturating_sub(SHADOWED_LIGHTS)
+            lights.len().saturating_sub(self.chain_punctual)
         );
         // What was learned is kept where the new grid has the same cells and groups (the same
         // header: the bounds did not change): an estimate is what a cell sees of a region of the
@@ -420,22 +438,52 @@ pub fn emitter_bases(scene: &Scene) -> (Vec<u32>, u32) {
     (bases, next)
 }
 
-/// The mesh lights of the shadows chain: the emissive instances that take the chain's channels
-/// left free by the `punctual` lights kept (it has SHADOWED_LIGHTS), brightest first. Such an
-/// instance must emit its material's factor alone (no emissive texture), be opaque and rigid,
-/// and have at most MAX_CHAIN_EMITTER_TRIANGLES triangles: composite then integrates its
+/// The shadows chain's lights (`chain_lights`): how many punctual lights lead the shading order
+/// with a channel each, and the mesh lights' instances after them.
+#[derive(Clone, Copy, Debug)]
+pub struct ChainLights<'a> {
+    pub punctual: usize,
+    pub meshes: &'a [u32],
+}
+
+/// The shadows chain's lights, punctual and mesh lights ranked together: of the kept punctual
+/// lights (`punctual`, indices into the scene's lights) and the emissive instances that can be
+/// mesh lights, the SHADOWED_LIGHTS that emit the most light (a tie goes to the punctual
+/// light). Returns how many of them are punctual lights, which lead the shading order
+/// (`shading_order(.., that many)`), and the mesh lights that take the channels after them,
+/// brightest first, each as (instance, first emitter, triangles). Before, the punctual lights
+/// took the channels first and a mesh light only one they left.
+///
+/// A mesh light must emit its material's factor alone (no emissive texture), be opaque and
+/// rigid, and have at most MAX_CHAIN_EMITTER_TRIANGLES triangles: composite then integrates its
 /// unshadowed light exactly (the polygons' form factors), and the chain's adaptive shadow rays
-/// give the share that arrives. Each is given as (instance, first emitter, triangles).
-pub fn chain_emitters(scene: &Scene, punctual: usize) -> Vec<(u32, u32, u32)> {
-    let free = SHADOWED_LIGHTS.saturating_sub(punctual);
+/// give the share that arrives. `mesh_lights` false: none is (`--no-mesh-lights`).
+pub fn chain_lights(scene: &Scene, punctual: &[usize], mesh_lights: bool) -> (usize, Vec<(u32, u32, u32)>) {
+    let radius = scene_radius(scene, &scene.evaluate(0.0));
+    let mut powers: Vec<f32> = punctual.iter().map(|&i| punctual_power(&scene.lights[i], radius)).collect();
+    powers.sort_by(|a, b| b.total_cmp(a));
+    let meshes = if mesh_lights { mesh_light_candidates(scene) } else { Vec::new() };
+    let (mut lights, mut mesh) = (0, 0);
+    while lights + mesh < SHADOWED_LIGHTS {
+        match (powers.get(lights), meshes.get(mesh)) {
+            (Some(p), Some((_, q))) if p >= q => lights += 1,
+            (Some(_), None) => lights += 1,
+            (_, Some(_)) => mesh += 1,
+            (None, None) => break,
+        }
+    }
+    (lights, meshes[..mesh].iter().map(|&(m, _)| m).collect())
+}
+
+/// The emissive instances that can be mesh lights (see `chain_lights`), brightest first, each
+/// with its power at time 0 summed over its triangles as the light table weighs them.
+fn mesh_light_candidates(scene: &Scene) -> Vec<((u32, u32, u32), f32)> {
     let (bases, _) = emitter_bases(scene);
-    // Each emissive instance's power at time 0, summed over its triangles as the light table
-    // weighs them.
     let mut power = vec![0.0f32; scene.instances.len()];
     for e in emitters(scene, &scene.evaluate(0.0), &[]) {
         power[e.instance as usize] += emitter_power(scene, &e);
     }
-    let mut candidates: Vec<(u32, u32, u32)> = (0..scene.instances.len() as u32)
+    let mut candidates: Vec<((u32, u32, u32), f32)> = (0..scene.instances.len() as u32)
         .filter(|&i| power[i as usize] > 0.0)
         .filter_map(|i| {
             let inst = &scene.instances[i as usize];
@@ -446,11 +494,10 @@ pub fn chain_emitters(scene: &Scene, punctual: usize) -> Vec<(u32, u32, u32)> {
                 && !material.is_transmissive()
                 && !scene.deforms(inst.mesh)
                 && mesh.triangle_count() <= MAX_CHAIN_EMITTER_TRIANGLES;
-            fits.then_some((i, bases[i as usize], mesh.triangle_count() as u32))
+            fits.then_some(((i, bases[i as usize], mesh.triangle_count() as u32), power[i as usize]))
         })
         .collect();
-    candidates.sort_by(|a, b| power[b.0 as usize].total_cmp(&power[a.0 as usize]));
-    candidates.truncate(free);
+    candidates.sort_by(|a, b| b.1.total_cmp(&a.1));
     candidates
 }
 
@@ -487,11 +534,18 @@ pub fn emitters(scene: &Scene, pose: &Pose, chain: &[u32]) -> Vec<GpuEmitter> {
     out
 }
 
-/// The light grid for the punctual lights past the shadowed ones, within `capacity` entries;
+/// The light grid for the punctual lights past the `shadowed` ones, within `capacity` entries;
 /// with none of them resampled, cells without lights where `emitters`: gi learns in them what
 /// each cell sees of the emissive triangles.
-fn build_grid(lights: &[GpuLight], powers: &[f32], bounds: (Vec3, Vec3), capacity: usize, emitters: bool) -> LightGrid {
-    let grid = LightGrid::build_within(lights, powers, SHADOWED_LIGHTS, bounds, light_grid::RESOLUTION, capacity);
+fn build_grid(
+    lights: &[GpuLight],
+    powers: &[f32],
+    shadowed: usize,
+    bounds: (Vec3, Vec3),
+    capacity: usize,
+    emitters: bool,
+) -> LightGrid {
+    let grid = LightGrid::build_within(lights, powers, shadowed, bounds, light_grid::RESOLUTION, capacity);
     if grid.header.cell_count == 0 && emitters { LightGrid::cells_only(bounds, light_grid::RESOLUTION) } else { grid }
 }
 
@@ -633,8 +687,25 @@ mod tests {
         assert!(glsl.contains(&define), "common/mesh_lights.glsl must say {define}");
     }
 
+    /// `count` point lights of `intensity` candela at the lamp's node.
+    fn with_point_lights(s: &Scene, count: usize, intensity: f32) -> (Scene, Vec<usize>) {
+        let mut s = s.clone();
+        for k in 0..count {
+            s.lights.push(crate::scene::Light {
+                name: format!("point {k}"),
+                kind: LightKind::Point,
+                color: Vec3::ONE,
+                intensity,
+                range: None,
+                radius: 0.0,
+                node: 1,
+            });
+        }
+        (s, (0..count).collect())
+    }
+
     #[test]
-    fn small_plain_emitters_take_the_channels_the_punctual_lights_leave() {
+    fn small_plain_emitters_rank_with_the_punctual_lights_for_the_chain() {
         let mut s = emissive_scene(Vec3::ONE, false);
         // A brighter lamp, a textured one and one of too many triangles beside the first.
         let bright = s.materials.len() as u32;
@@ -652,10 +723,19 @@ mod tests {
         }
         let (bases, _) = emitter_bases(&s);
         // The bright quad first, then the first lamp; the textured quad and the sphere never.
-        let chain = chain_emitters(&s, 0);
-        assert_eq!(chain, vec![(2, bases[2], 2), (1, bases[1], 2)]);
-        assert_eq!(chain_emitters(&s, 3), vec![(2, bases[2], 2)], "one channel left by 3 punctual lights");
-        assert!(chain_emitters(&s, 4).is_empty(), "4 punctual lights leave none");
+        let (punctual, chain) = chain_lights(&s, &[], true);
+        assert_eq!((punctual, chain.clone()), (0, vec![(2, bases[2], 2), (1, bases[1], 2)]));
+        assert_eq!(chain_lights(&s, &[], false), (0, vec![]), "--no-mesh-lights");
+        // Brighter point lights (4 pi 100 against the quads' 5 pi and 2 pi) come first.
+        let (bright3, kept) = with_point_lights(&s, 3, 100.0);
+        assert_eq!(chain_lights(&bright3, &kept, true), (3, vec![(2, bases[2], 2)]), "one channel left by 3 lights");
+        let (bright4, kept) = with_point_lights(&s, 4, 100.0);
+        assert_eq!(chain_lights(&bright4, &kept, true), (4, vec![]), "4 brighter lights leave none");
+        // Dimmer ones (4 pi 0.5 = 2 pi, the lamp's: a tie goes to the light) give the bright quad a
+        // channel, and the lamp one only where fewer lights are kept.
+        let (dim6, kept) = with_point_lights(&s, 6, 0.5);
+        assert_eq!(chain_lights(&dim6, &kept, true), (3, vec![(2, bases[2], 2)]));
+        assert_eq!(chain_lights(&dim6, &kept[..2], true), (2, vec![(2, bases[2], 2), (1, bases[1], 2)]));
         let chain: Vec<u32> = chain.iter().map(|c| c.0).collect();
         let flagged: Vec<u32> = emitters(&s, &s.evaluate(0.0), &chain)
             .iter()

@@ -153,6 +153,9 @@ pub struct FrameUniforms {
     pub flags: u32,
     /// Last frame's `jitter`: what a reprojection onto last frame's texels corrects for.
     pub prev_jitter: [f32; 2],
+    /// The punctual lights with a channel of the shadows chain, lights 0.. (the frame plan's
+    /// `chain_punctual`); the others are resampled.
+    pub chain_punctual: u32,
 }
 
 /// `FrameUniforms::flags`: the first frame, or a camera cut: no temporal history is valid.
@@ -208,7 +211,7 @@ impl SceneGpu {
         environment: &EnvironmentData,
         brdf: super::brdf::BrdfModel,
         light_grid: bool,
-        mesh_lights: &[u32],
+        chain: super::lights::ChainLights,
     ) -> Result<Self> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Acceleration-structure builds read the geometry by device address.
@@ -299,7 +302,7 @@ impl SceneGpu {
         let mut bindings = scene_bindings(texture_bindings.len() as u32);
         bindings.extend(accel.bindings());
         bindings.extend(lights::bindings());
-        let light_tables = LightTables::new(ctx, pool, scene, pose, environment, light_grid, mesh_lights)?;
+        let light_tables = LightTables::new(ctx, pool, scene, pose, environment, light_grid, chain)?;
         let brdf_data = gpu::upload::device_buffer(ctx, pool, "brdf_data", &super::brdf::gpu_data(brdf), storage)?;
         let set_layout = DescriptorSetLayout::new(ctx, &bindings, false)?;
         let set = DescriptorSet::new(ctx, &set_layout)?;

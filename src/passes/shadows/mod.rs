@@ -8,7 +8,7 @@
 //! Lights with a radius (sphere lights for points, disk lights for spots) are soft: adaptive
 //! sample counts 1..s_max, filtering, history. Lights without one are hard: one ray, no filter.
 //! Channels the punctual lights leave free go to mesh lights (small emissive meshes,
-//! world::lights::chain_emitters), which are soft like sphere lights.
+//! world::lights::chain_lights), which are soft like sphere lights.
 //! The final visibility is `shadows_filter.visibility`, one channel per light, grey; the colour
 //! of tinted glass on the way goes beside it, unfiltered, in `shadows.tint`.
 
@@ -90,11 +90,11 @@ pub struct MeshLights {
 
 impl MeshLights {
     /// The channels after the `punctual` lights' go to `chain` ((instance, first emitter,
-    /// triangles): world::lights::chain_emitters), in order.
+    /// triangles): world::lights::chain_lights), in order.
     pub fn new(punctual: usize, chain: &[(u32, u32, u32)]) -> Self {
         let mut m = Self::default();
         for (k, &(_, first, triangles)) in chain.iter().enumerate() {
-            let channel = punctual.min(MAX_SHADOWED_LIGHTS) + k;
+            let channel = punctual + k;
             m.first_emitter[channel] = first;
             m.triangles[channel] = triangles;
         }
