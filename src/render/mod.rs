@@ -65,8 +65,8 @@ pub struct Settings {
     /// Draw the resampled lights from the light grid (world::light_grid). Off
     /// (`--no-light-grid`): by power from all of them, what the grid is checked against.
     pub light_grid: bool,
-    /// Small plain emissive meshes take the shadows chain's channels the punctual lights leave
-    /// free (world::lights::chain_emitters). Off (`--no-mesh-lights`): every emissive triangle
+    /// Small plain emissive meshes take shadows chain channels, ranked with the punctual lights
+    /// (world::lights::chain_lights). Off (`--no-mesh-lights`): every emissive triangle
     /// is resampled in gi, as before 2026-12-06.
     pub mesh_lights: bool,
 }

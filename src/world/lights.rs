@@ -49,7 +49,7 @@ pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
 pub const LIGHT_KIND_EMITTER: u32 = 1;
 pub const LIGHT_KIND_ENVIRONMENT: u32 = 2;
 pub const EMITTER_DOUBLE_SIDED: u32 = 1;
-/// The emitter belongs to a mesh light of the shadows chain (`chain_emitters`): composite
+/// The emitter belongs to a mesh light of the shadows chain (`chain_lights`): composite
 /// shades it, so gi's reservoirs leave it out. Mirrors EMITTER_IN_CHAIN in
 /// common/light_sampling.glsl.
 pub const EMITTER_IN_CHAIN: u32 = 2;
