@@ -204,10 +204,10 @@ fn reduced_rate_gi_keeps_the_energy_of_full_rate() {
 /// rate: one pixel of each 2x2 block) and marks each other pixel with its neighbours on the
 /// lattice that show its surface; gi_fill gives it their mean and copies every other pixel.
 /// Checked over a full cycle of each lattice (two frames at half rate, four at quarter rate):
-/// each marked pixel's sources were traced this frame and are the same instance, its value is their mean, nearly
-/// all of the untraced share of the pixels is filled (on the box's flat walls every untraced
-/// pixel has a neighbour on its own surface: measured 2048 of 4096 at half rate, 3037-3067 at
-/// quarter rate), and over the cycle every pixel is traced at least once.
+/// each marked pixel's sources were traced this frame and are the same instance, its value is
+/// their mean, nearly all of the untraced share of the pixels is filled (on the box's flat walls
+/// every untraced pixel has a neighbour on its own surface: measured 2048 of 4096 at half rate,
+/// 3037-3067 at quarter rate), and over the cycle every pixel is traced at least once.
 #[test]
 fn reduced_rate_gi_fill_takes_the_mean_of_traced_neighbours() {
     let ctx = common::validated_context();

@@ -1,6 +1,6 @@
-//! gi_fill: at half or quarter rate, completes gi's signals (shaders-glsl/gi_fill.comp): each pixel gi
-//! left untraced takes the mean of its traced neighbours that show the same surface, which gi
-//! marked in its radiance's alpha (common/gi_fill.glsl); every other pixel is copied.
+//! gi_fill: at half or quarter rate, completes gi's signals (shaders-glsl/gi_fill.comp): each
+//! pixel gi left untraced takes the mean of its traced neighbours that show the same surface,
+//! which gi marked in its radiance's alpha (common/gi_fill.glsl); every other pixel is copied.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};

@@ -10,9 +10,9 @@ use serde::{Deserialize, Serialize};
 /// joined by `-`: `d` SVGF à-trous iterations (0 = denoiser off), `s` shadow rays per pixel
 /// and area light at most (s_max), `b` GI bounces, `r` reflection rays per pixel, `t0`
 /// when TAA is off, `c0` when the radiance cache is off, `g1`/`g2`/`g4` when gi traces all of
-/// the pixels each frame, half or a quarter of them (against the default), and `f1` when every pass runs
-/// instead of the scene's frame plan (src/render/plan.rs): a pair differing only in `f` shows
-/// what the plan saves and costs. Settings left out of a name take the defaults
+/// the pixels each frame, half or a quarter of them (against the default), and `f1` when every
+/// pass runs instead of the scene's frame plan (src/render/plan.rs): a pair differing only in
+/// `f` shows what the plan saves and costs. Settings left out of a name take the defaults
 /// (`d4-s3-b1-r1`, TAA on: the renderer's defaults, and what `hybrid-rt render` draws).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Config {
