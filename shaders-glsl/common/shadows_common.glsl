@@ -1,10 +1,10 @@
 // Shared by the adaptive soft-shadow passes (shadows, shadows_penumbra, shadows_tent_h/_v,
 // shadows_filter), after Ray Tracing Gems ch. 13 (Boksansky, Wimmer, Bittner): visibility of
 // up to four lights, one per RGBA channel: the punctual lights first, then mesh lights
-// (common/mesh_lights.glsl), the four brightest of both (world::lights::chain_lights). Punctual lights with a radius (sphere for
-// point lights, disk for spots) and mesh lights are area lights and get adaptive sample counts,
-// filtering and a 4-frame history; punctual lights without one are hard: one ray, no
-// filtering.
+// (common/mesh_lights.glsl), the four of both that world::lights::chain_lights ranks first.
+// Punctual lights with a radius (sphere for point lights, disk for spots) and mesh lights are
+// area lights and get adaptive sample counts, filtering and a 4-frame history; punctual lights
+// without one are hard: one ray, no filtering.
 #ifndef SHADOWS_COMMON_GLSL
 #define SHADOWS_COMMON_GLSL
 

@@ -184,6 +184,9 @@ fn renderer(rig: &Rig, scene: Scene, denoised: bool, start_time: f32, camera: us
         frame_dt: FRAME_DT,
         start_time,
         gi: GiSettings { rate: rig.gi_rate, ..Default::default() },
+        // The resampled scenarios' brighter lights stand behind a wall so that `mover` and
+        // `switched` are resampled; ranked by the first view, those two would take the chain.
+        chain_by_view: false,
         ..Default::default()
     };
     Renderer::new(rig.ctx, rig.shaders, scene, settings, &CameraChoice::Index(camera), rig.backend)

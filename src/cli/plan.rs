@@ -18,7 +18,8 @@ pub struct PlanArgs {
     #[command(flatten)]
     environment: EnvironmentArgs,
     /// Scene camera by name or index (default: the first camera, or a framing camera): the
-    /// default light is not given to a camera in a closed room.
+    /// default light is not given to a camera in a closed room, and the shadows chain goes to
+    /// the lights that bring the most to its view.
     #[arg(long)]
     camera: Option<CameraChoice>,
 }
@@ -26,9 +27,16 @@ pub struct PlanArgs {
 pub fn run(a: &PlanArgs) -> Result<()> {
     let scene = a.scene.load()?;
     let defaults = Settings::default();
-    let plan =
-        FramePlan::for_scene(&scene, defaults.reflections.roughness_cutoff, defaults.light_grid, defaults.mesh_lights);
-    let start = camera::start_position(&scene, &a.camera.clone().unwrap_or_default())?;
+    let choice = a.camera.clone().unwrap_or_default();
+    let view = camera::first_view(&scene, &choice, defaults.width, defaults.height)?;
+    let plan = FramePlan::for_scene(
+        &scene,
+        defaults.reflections.roughness_cutoff,
+        defaults.light_grid,
+        defaults.mesh_lights,
+        Some(&view),
+    );
+    let start = camera::start_position(&scene, &choice)?;
     let lighting = default_light::choose(&a.environment.environment(), &scene, start);
     if a.json {
         #[derive(serde::Serialize)]

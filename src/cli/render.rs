@@ -78,6 +78,10 @@ pub struct RenderArgs {
     /// shadows chain's free channels (closed-form light, adaptive soft shadows).
     #[arg(long)]
     no_mesh_lights: bool,
+    /// Give the shadows chain's four channels to the lights that emit the most over the whole
+    /// scene instead of those that bring the most direct light to the first view.
+    #[arg(long)]
+    chain_by_power: bool,
     /// Exposure multiplier before tonemapping.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
@@ -128,6 +132,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         brdf: a.brdf,
         light_grid: !a.no_light_grid,
         mesh_lights: !a.no_mesh_lights,
+        chain_by_view: !a.chain_by_power,
         ..Default::default()
     };
     if let Some(b) = a.gi_bounces {

@@ -118,6 +118,13 @@ pub fn start_position(scene: &Scene, choice: &CameraChoice) -> Result<Vec3> {
     Ok(view_at(scene, resolve(scene, choice)?, &scene.evaluate(0.0), 1.0).position)
 }
 
+/// The chosen camera's view at time 0 for an image of `width` x `height` (what the frame plan
+/// ranks the shadows chain's lights by).
+pub fn first_view(scene: &Scene, choice: &CameraChoice, width: u32, height: u32) -> Result<View> {
+    let aspect = width.max(1) as f32 / height.max(1) as f32;
+    Ok(view_at(scene, resolve(scene, choice)?, &scene.evaluate(0.0), aspect))
+}
+
 /// A camera on the +Z side of the scene's bounds, seeing all of it.
 fn framing_view(scene: &Scene, pose: &Pose, aspect: f32) -> View {
     let (lo, hi) = scene.bounds(pose);

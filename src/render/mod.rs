@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod default_light;
 pub mod frame;
+pub mod light_view;
 pub mod plan;
 pub mod ray_batch;
 pub mod sky;
@@ -69,6 +70,10 @@ pub struct Settings {
     /// (world::lights::chain_lights). Off (`--no-mesh-lights`): every emissive triangle
     /// is resampled in gi, as before 2026-12-06.
     pub mesh_lights: bool,
+    /// Where more lights compete for the shadows chain's channels than it has, rank them by
+    /// the direct light they bring to the first view (render::light_view). Off
+    /// (`--chain-by-power`): by the power they emit over the whole scene, as before 2026-12-06.
+    pub chain_by_view: bool,
 }
 
 /// Which frame the renderer builds.
@@ -111,6 +116,7 @@ impl Default for Settings {
             brdf: brdf::BrdfModel::Gltf,
             light_grid: true,
             mesh_lights: true,
+            chain_by_view: true,
         }
     }
 }
@@ -213,14 +219,18 @@ impl Renderer {
                 scene.name
             );
         }
+        // The shadows chain's lights are ranked by what they bring to the first view.
+        let first_view = camera::first_view(&scene, camera, settings.width, settings.height)?;
+        let ranked_by = settings.chain_by_view.then_some(&first_view);
         let plan = if settings.full {
-            plan::FramePlan::full(&scene, settings.mesh_lights)
+            plan::FramePlan::full(&scene, settings.mesh_lights, ranked_by)
         } else {
             plan::FramePlan::for_scene(
                 &scene,
                 settings.reflections.roughness_cutoff,
                 settings.light_grid,
                 settings.mesh_lights,
+                ranked_by,
             )
         };
         // The culled lights out, the rest in shading order (the shadowed ones first).

@@ -8,8 +8,9 @@
 //! - Lights whose range cannot reach any geometry are culled (static scenes only: in an
 //!   animated scene a light or an object could move into range).
 //! - Up to four punctual lights each get their own ray-traced visibility (exact and noise-free,
-//!   with adaptive soft shadows); with more, the four brightest keep it and the rest are
-//!   resampled in gi: one light per pixel from candidates drawn from the light grid (each cell
+//!   with adaptive soft shadows); with more, the four that bring the most direct light to the
+//!   first view keep it (render::light_view; small emissive meshes compete for it too) and the
+//!   rest are resampled in gi: one light per pixel from candidates drawn from the light grid (each cell
 //!   lists the lights whose range reaches it) and the pixel's reservoir of last frame, with
 //!   shadow rays, so the cost per pixel does not grow with their number (see
 //!   world::lights::shading_order, world::light_grid and shaders-glsl/common/light_reservoir.glsl).
@@ -18,6 +19,8 @@
 //!   specular lobe to come from gi, or when lights are resampled (gi shades them); otherwise it
 //!   would have nothing to add.
 
+use super::camera::View;
+use super::light_view::LightView;
 use crate::passes::shadows::MAX_SHADOWED_LIGHTS;
 use crate::scene::{Scene, TextureRef};
 use glam::Vec3;
@@ -40,7 +43,8 @@ pub struct FramePlan {
     /// (world::lights::shading_order): the first `chain_punctual` get the shadows chain.
     pub light_order: Vec<usize>,
     /// How many punctual lights have a channel of the shadows chain: of the punctual and mesh
-    /// lights, the MAX_SHADOWED_LIGHTS brightest get one (world::lights::chain_lights).
+    /// lights, the MAX_SHADOWED_LIGHTS that bring the most to the first view get one
+    /// (world::lights::chain_lights).
     pub chain_punctual: usize,
     /// Lights past the per-light-shadowed ones, resampled in gi.
     pub resampled_lights: usize,
@@ -50,6 +54,9 @@ pub struct FramePlan {
     /// The mesh lights that take the shadows chain's channels after the punctual lights
     /// (world::lights::chain_lights): (instance, first emitter, triangles).
     pub chain_emitters: Vec<(u32, u32, u32)>,
+    /// More lights competed for the chain than it has channels, and they were ranked by what
+    /// they bring to the first view (render::light_view) rather than by power.
+    pub chain_by_view: bool,
     /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
     /// cells by it.
     pub scene_diagonal: f32,
@@ -64,11 +71,12 @@ impl FramePlan {
         self.resampled_lights > 0 || self.emitters > 0
     }
 
-    /// Everything on (`--full`); `mesh_lights` as in [`FramePlan::for_scene`].
-    pub fn full(scene: &Scene, mesh_lights: bool) -> Self {
+    /// Everything on (`--full`); `mesh_lights` and `view` as in [`FramePlan::for_scene`].
+    pub fn full(scene: &Scene, mesh_lights: bool, view: Option<&View>) -> Self {
         let kept: Vec<usize> = (0..scene.lights.len()).collect();
-        let (chain_punctual, chain_emitters) = crate::world::lights::chain_lights(scene, &kept, mesh_lights);
-        let light_order = crate::world::lights::shading_order(scene, &[], chain_punctual);
+        let (chain, chain_emitters, chain_by_view) = chain_lights(scene, &kept, mesh_lights, view);
+        let chain_punctual = chain.len();
+        let light_order = crate::world::lights::shading_order(scene, &[], &chain);
         Self {
             reflections: true,
             soft_shadows: true,
@@ -78,6 +86,7 @@ impl FramePlan {
             resampled_lights: light_order.len() - chain_punctual,
             emitters: crate::world::lights::emitter_bases(scene).1 - chain_triangles(&chain_emitters),
             chain_emitters,
+            chain_by_view,
             light_order,
             chain_punctual,
             scene_diagonal: scene_diagonal(scene),
@@ -88,8 +97,16 @@ impl FramePlan {
     /// `light_grid`: the resampled lights' candidates are drawn from the light grid
     /// (`Settings::light_grid`), which only the reason's text depends on.
     /// `mesh_lights`: small emissive meshes may take the shadows chain's free channels
-    /// (`Settings::mesh_lights`).
-    pub fn for_scene(scene: &Scene, roughness_cutoff: f32, light_grid: bool, mesh_lights: bool) -> Self {
+    /// (`Settings::mesh_lights`). `view`: the camera at time 0; where more lights compete for
+    /// the shadows chain than it has channels, they rank by what they bring to it
+    /// (render::light_view), and by power without it.
+    pub fn for_scene(
+        scene: &Scene,
+        roughness_cutoff: f32,
+        light_grid: bool,
+        mesh_lights: bool,
+        view: Option<&View>,
+    ) -> Self {
         let mut reasons = Vec::new();
 
         let glossy: Vec<&str> = scene
@@ -117,8 +134,9 @@ impl FramePlan {
 
         let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
         let kept: Vec<usize> = (0..scene.lights.len()).filter(|i| !culled_lights.contains(i)).collect();
-        let (chain_punctual, chain_emitters) = crate::world::lights::chain_lights(scene, &kept, mesh_lights);
-        let light_order = crate::world::lights::shading_order(scene, &culled_lights, chain_punctual);
+        let (chain, chain_emitters, chain_by_view) = chain_lights(scene, &kept, mesh_lights, view);
+        let chain_punctual = chain.len();
+        let light_order = crate::world::lights::shading_order(scene, &culled_lights, &chain);
         let shadowed = &light_order[..chain_punctual];
         let mut soft: Vec<&str> =
             shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
@@ -162,8 +180,9 @@ impl FramePlan {
                 "none keeps a visibility of its own (brighter mesh lights hold the shadows chain)".to_string()
             } else {
                 format!(
-                    "the {} brightest ({}) keep a visibility of their own (exact, noise-free)",
+                    "the {} {} ({}) keep a visibility of their own (exact, noise-free)",
                     shadowed.len(),
+                    if chain_by_view { "that bring the most direct light to the first view" } else { "brightest" },
                     list(&names)
                 )
             };
@@ -194,11 +213,12 @@ impl FramePlan {
         if !mesh_lights.is_empty() {
             reasons.push(format!(
                 "mesh lights: {} emissive mesh(es) of at most {} triangles take shadows chain channel(s), \
-                 ranked with the punctual lights by the light they emit (composite integrates their \
+                 ranked with the punctual lights by the light they {} (composite integrates their \
                  unshadowed light exactly, the chain's adaptive shadow rays give the share that arrives, \
                  gi's reservoirs leave them out): {}",
                 mesh_lights.len(),
                 crate::world::lights::MAX_CHAIN_EMITTER_TRIANGLES,
+                if chain_by_view { "bring to the first view" } else { "emit" },
                 list(&mesh_lights)
             ));
         }
@@ -246,6 +266,7 @@ impl FramePlan {
             resampled_lights,
             emitters,
             chain_emitters,
+            chain_by_view,
             scene_diagonal: scene_diagonal(scene),
             reasons,
         }
@@ -269,6 +290,25 @@ fn scene_diagonal(scene: &Scene) -> f32 {
     let (lo, hi) = scene.bounds(&scene.evaluate(0.0));
     let d = (hi - lo).length();
     if d.is_finite() { d } else { 1.0 }
+}
+
+/// world::lights::chain_lights, its candidates ranked by what they bring to `view` where one is
+/// given and more compete than the chain has channels (the CPU BVH is built only then).
+/// Also says whether the view ranked them (some of its rays reached a surface).
+fn chain_lights(
+    scene: &Scene,
+    kept: &[usize],
+    mesh_lights: bool,
+    view: Option<&View>,
+) -> (Vec<usize>, Vec<(u32, u32, u32)>, bool) {
+    let seen = std::cell::OnceCell::new();
+    let brings = |c| match view {
+        Some(v) => seen.get_or_init(|| LightView::new(scene, v)).brings(c),
+        None => 0.0,
+    };
+    let (lights, meshes) = crate::world::lights::chain_lights(scene, kept, mesh_lights, &brings);
+    let by_view = seen.get().is_some_and(|v| v.surfaces() > 0);
+    (lights, meshes, by_view)
 }
 
 /// Thin glass (transmissive without a volume, which shadow rays cross) whose base colour is not
@@ -363,9 +403,9 @@ mod tests {
 
     #[test]
     fn punctual_only_scenes_get_hard_shadows_and_matte_ones_no_reflection_rays() {
-        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true);
+        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true, None);
         assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true, None);
         assert!(p.soft_shadows);
     }
 
@@ -374,7 +414,7 @@ mod tests {
         let tinted_with = |m: crate::scene::Material| {
             let mut s = builtin::shadow_test();
             s.materials[0] = m;
-            FramePlan::for_scene(&s, 0.6, true, true).tinted_shadows
+            FramePlan::for_scene(&s, 0.6, true, true, None).tinted_shadows
         };
         let glass = |rgb: Vec3| crate::scene::Material {
             name: "glass".into(),
@@ -394,11 +434,14 @@ mod tests {
             ..Default::default()
         };
         assert!(!tinted_with(blend), "blended surfaces let 1 - alpha through, grey");
-        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true).tinted_shadows);
+        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true, None).tinted_shadows);
         let mut unlit = builtin::shadow_test();
         unlit.materials[0] = glass(Vec3::new(1.0, 0.5, 0.25));
         unlit.lights.clear();
-        assert!(!FramePlan::for_scene(&unlit, 0.6, true, true).tinted_shadows, "no punctual light: nothing to shadow");
+        assert!(
+            !FramePlan::for_scene(&unlit, 0.6, true, true, None).tinted_shadows,
+            "no punctual light: nothing to shadow"
+        );
     }
 
     #[test]
@@ -417,18 +460,18 @@ mod tests {
         });
         far.node = node;
         s.lights.push(far);
-        let p = FramePlan::for_scene(&s, 0.6, true, true);
+        let p = FramePlan::for_scene(&s, 0.6, true, true, None);
         assert_eq!(p.culled_lights, vec![1], "{:?}", p.reasons);
         // The same light in reach stays.
         s.nodes[node as usize].translation = Vec3::new(0.0, 1.5, 0.0);
-        assert!(FramePlan::for_scene(&s, 0.6, true, true).culled_lights.is_empty());
-        assert_eq!(FramePlan::for_scene(&s, 0.6, true, true).light_order, vec![0, 1]);
+        assert!(FramePlan::for_scene(&s, 0.6, true, true, None).culled_lights.is_empty());
+        assert_eq!(FramePlan::for_scene(&s, 0.6, true, true, None).light_order, vec![0, 1]);
     }
 
     #[test]
     fn lights_past_the_shadowed_four_are_resampled_and_the_plan_names_the_four() {
         let s = crate::scene::builtin_many_lights::many_lights();
-        let p = FramePlan::for_scene(&s, 0.6, true, true);
+        let p = FramePlan::for_scene(&s, 0.6, true, true, None);
         // (The camera room's highest lights reach no surface with their short range: culled.)
         assert_eq!(p.light_order.len(), s.lights.len() - p.culled_lights.len());
         assert_eq!(p.chain_punctual, MAX_SHADOWED_LIGHTS);
@@ -440,11 +483,11 @@ mod tests {
         }
         assert!(line.contains("light_grid_update"), "{line}");
         // Without the light grid the line says where the candidates come from instead.
-        let p = FramePlan::for_scene(&s, 0.6, false, true);
+        let p = FramePlan::for_scene(&s, 0.6, false, true, None);
         let line = p.reasons.iter().find(|r| r.starts_with("many lights")).expect("no many-lights line");
         assert!(line.contains("--no-light-grid") && !line.contains("light_grid_update"), "{line}");
         // Four lights or fewer: none resampled, the scene's order kept.
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true, None);
         assert_eq!((p.resampled_lights, p.light_order.clone()), (0, vec![0]));
     }
 }

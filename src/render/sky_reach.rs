@@ -11,7 +11,7 @@
 //! sees out at once and is not traced.
 
 use crate::accel::bvh::rays::SplitMix64;
-use crate::accel::bvh::{SceneBvh, closest_hit};
+use crate::accel::bvh::{Hit, SceneBvh, closest_hit};
 use crate::scene::{AlphaMode, Pose, Scene};
 use glam::Vec3;
 
@@ -64,19 +64,8 @@ fn walk_escapes(scene: &Scene, pose: &Pose, bvh: &SceneBvh, from: Vec3, eps: f32
         let Some(hit) = closest_hit(bvh, origin, dir, 0.0, f32::INFINITY, 0xFF, |_, _, _, _| false) else {
             return true;
         };
-        let instance = &scene.instances[hit.instance as usize];
-        let mesh = &scene.meshes[instance.mesh as usize];
-        let world = pose.world[instance.node as usize];
-        let corner = |k: usize| {
-            let index = mesh.indices[hit.primitive as usize * 3 + k] as usize;
-            world.transform_point3(Vec3::from(mesh.vertices[index].position))
-        };
-        let p = origin + dir * hit.t;
-        let normal = (corner(1) - corner(0)).cross(corner(2) - corner(0)).normalize_or_zero();
-        // The side the walk arrived on.
-        let facing = if normal.dot(dir) > 0.0 { -normal } else { normal };
-        let material = scene.materials.get(mesh.material as usize);
-        if material.is_some_and(|m| m.is_transmissive() || m.alpha_mode != AlphaMode::Opaque) {
+        let Surface { position: p, facing, see_through } = Surface::at(scene, pose, &hit, origin, dir);
+        if see_through {
             origin = p - facing * eps;
             continue;
         }
@@ -88,6 +77,34 @@ fn walk_escapes(scene: &Scene, pose: &Pose, bvh: &SceneBvh, from: Vec3, eps: f32
         dir = cosine_around(facing, rng.unit(), rng.unit());
     }
     false
+}
+
+/// Where a CPU ray hit: the point, the triangle's normal on the side the ray arrived from, and
+/// whether light passes the surface (glass, blended or alpha-tested materials), which the walks
+/// and render::light_view's rays cross as if open.
+pub(crate) struct Surface {
+    pub position: Vec3,
+    pub facing: Vec3,
+    pub see_through: bool,
+}
+
+impl Surface {
+    pub fn at(scene: &Scene, pose: &Pose, hit: &Hit, origin: Vec3, dir: Vec3) -> Self {
+        let instance = &scene.instances[hit.instance as usize];
+        let mesh = &scene.meshes[instance.mesh as usize];
+        let world = pose.world[instance.node as usize];
+        let corner = |k: usize| {
+            let index = mesh.indices[hit.primitive as usize * 3 + k] as usize;
+            world.transform_point3(Vec3::from(mesh.vertices[index].position))
+        };
+        let normal = (corner(1) - corner(0)).cross(corner(2) - corner(0)).normalize_or_zero();
+        let material = scene.materials.get(mesh.material as usize);
+        Self {
+            position: origin + dir * hit.t,
+            facing: if normal.dot(dir) > 0.0 { -normal } else { normal },
+            see_through: material.is_some_and(|m| m.is_transmissive() || m.alpha_mode != AlphaMode::Opaque),
+        }
+    }
 }
 
 /// A uniformly distributed unit vector.

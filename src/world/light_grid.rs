@@ -395,7 +395,7 @@ fn cone_reaches(light: &GpuLight, cell: (Vec3, Vec3)) -> bool {
 }
 
 /// common/lights.glsl's `range_window`.
-fn range_window(dist: f32, range: f32) -> f32 {
+pub(crate) fn range_window(dist: f32, range: f32) -> f32 {
     if range <= 0.0 {
         return 1.0;
     }

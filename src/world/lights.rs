@@ -40,9 +40,9 @@ use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
-/// The shadows chain's channels: the punctual and mesh lights that emit the most light take one
-/// each (`chain_lights`), the punctual ones first in `shading_order`; the other punctual lights
-/// are resampled. Mirrors SHADOW_LIGHTS in common/shadows_common.glsl.
+/// The shadows chain's channels: the punctual and mesh lights that bring the most light to the
+/// first view take one each (`chain_lights`), the punctual ones first in `shading_order`; the
+/// other punctual lights are resampled. Mirrors SHADOW_LIGHTS in common/shadows_common.glsl.
 pub const SHADOWED_LIGHTS: usize = 4;
 
 pub const LIGHT_KIND_PUNCTUAL: u32 = 0;
@@ -446,33 +446,70 @@ pub struct ChainLights<'a> {
     pub meshes: &'a [u32],
 }
 
+/// A light that can take a channel of the shadows chain (`chain_lights`): a punctual light
+/// (index into the scene's lights) or a mesh light (its instance).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ChainCandidate {
+    Punctual(usize),
+    Mesh(u32),
+}
+
 /// The shadows chain's lights, punctual and mesh lights ranked together: of the kept punctual
 /// lights (`punctual`, indices into the scene's lights) and the emissive instances that can be
-/// mesh lights, the SHADOWED_LIGHTS that emit the most light (a tie goes to the punctual
-/// light). Returns how many of them are punctual lights, which lead the shading order
-/// (`shading_order(.., that many)`), and the mesh lights that take the channels after them,
-/// brightest first, each as (instance, first emitter, triangles). Before, the punctual lights
-/// took the channels first and a mesh light only one they left.
+/// mesh lights, the SHADOWED_LIGHTS that bring the most light. Where more compete than that,
+/// `seen` says what each brings to what the camera sees (render::light_view), and they rank by
+/// it; candidates it finds equal (none reaching the view, or `seen` 0 for all) rank by the
+/// power they emit over the whole scene, and a tie goes to the punctual light. Returns the
+/// punctual lights among them, in rank order (they lead `shading_order`), and the mesh lights
+/// that take the channels after them, each as (instance, first emitter, triangles). Until
+/// 2026-12-06 the ranking was by power alone, so a bright light behind a wall held a channel
+/// that a light in the camera's room would use (`builtin:many-lights`: two of the four).
 ///
 /// A mesh light must emit its material's factor alone (no emissive texture), be opaque and
 /// rigid, and have at most MAX_CHAIN_EMITTER_TRIANGLES triangles: composite then integrates its
 /// unshadowed light exactly (the polygons' form factors), and the chain's adaptive shadow rays
 /// give the share that arrives. `mesh_lights` false: none is (`--no-mesh-lights`).
-pub fn chain_lights(scene: &Scene, punctual: &[usize], mesh_lights: bool) -> (usize, Vec<(u32, u32, u32)>) {
+pub fn chain_lights(
+    scene: &Scene,
+    punctual: &[usize],
+    mesh_lights: bool,
+    seen: &dyn Fn(ChainCandidate) -> f32,
+) -> (Vec<usize>, Vec<(u32, u32, u32)>) {
     let radius = scene_radius(scene, &scene.evaluate(0.0));
-    let mut powers: Vec<f32> = punctual.iter().map(|&i| punctual_power(&scene.lights[i], radius)).collect();
-    powers.sort_by(|a, b| b.total_cmp(a));
     let meshes = if mesh_lights { mesh_light_candidates(scene) } else { Vec::new() };
-    let (mut lights, mut mesh) = (0, 0);
-    while lights + mesh < SHADOWED_LIGHTS {
-        match (powers.get(lights), meshes.get(mesh)) {
-            (Some(p), Some((_, q))) if p >= q => lights += 1,
-            (Some(_), None) => lights += 1,
-            (_, Some(_)) => mesh += 1,
-            (None, None) => break,
-        }
-    }
-    (lights, meshes[..mesh].iter().map(|&(m, _)| m).collect())
+    let candidates: Vec<(ChainCandidate, f32)> = punctual
+        .iter()
+        .map(|&i| (ChainCandidate::Punctual(i), punctual_power(&scene.lights[i], radius)))
+        .chain(meshes.iter().map(|&((instance, ..), power)| (ChainCandidate::Mesh(instance), power)))
+        .collect();
+    let view: Vec<f32> = if candidates.len() > SHADOWED_LIGHTS {
+        candidates.iter().map(|&(c, _)| seen(c)).collect()
+    } else {
+        vec![0.0; candidates.len()]
+    };
+    // What a candidate brings to the view, then its power, then the punctual light first; the
+    // sort is stable, so equal candidates keep the scene's order.
+    let mut rank: Vec<usize> = (0..candidates.len()).collect();
+    let mesh = |k: usize| matches!(candidates[k].0, ChainCandidate::Mesh(_));
+    rank.sort_by(|&a, &b| {
+        view[b].total_cmp(&view[a]).then(candidates[b].1.total_cmp(&candidates[a].1)).then(mesh(a).cmp(&mesh(b)))
+    });
+    let chosen: Vec<ChainCandidate> = rank.iter().take(SHADOWED_LIGHTS).map(|&k| candidates[k].0).collect();
+    let lights = chosen
+        .iter()
+        .filter_map(|c| match c {
+            ChainCandidate::Punctual(i) => Some(*i),
+            ChainCandidate::Mesh(_) => None,
+        })
+        .collect();
+    let chain = chosen
+        .iter()
+        .filter_map(|c| match c {
+            ChainCandidate::Mesh(i) => meshes.iter().find(|m| m.0.0 == *i).map(|m| m.0),
+            ChainCandidate::Punctual(_) => None,
+        })
+        .collect();
+    (lights, chain)
 }
 
 /// The emissive instances that can be mesh lights (see `chain_lights`), brightest first, each
@@ -574,16 +611,18 @@ fn emitter_power(scene: &Scene, e: &GpuEmitter) -> f32 {
 }
 
 /// The order in which the renderer keeps the scene's lights, `excluded` (culled) left out. The
-/// first `shadowed` get the shadows chain's per-light visibility (exact, with adaptive soft
-/// shadows), the rest are resampled in gi (shaders-glsl/common/light_reservoir.glsl); so with
-/// more lights than that, the brightest (by power, ties in scene order) come first. With no
-/// more, the scene's order is kept.
-pub fn shading_order(scene: &Scene, excluded: &[usize], shadowed: usize) -> Vec<usize> {
+/// shadows chain's punctual lights (`chain`, from `chain_lights`) come first and get its
+/// per-light visibility (exact, with adaptive soft shadows), the rest are resampled in gi
+/// (shaders-glsl/common/light_reservoir.glsl), brightest (by power, ties in scene order) first.
+/// Where the chain holds every kept light, the scene's order is kept.
+pub fn shading_order(scene: &Scene, excluded: &[usize], chain: &[usize]) -> Vec<usize> {
     let mut order: Vec<usize> = (0..scene.lights.len()).filter(|i| !excluded.contains(i)).collect();
-    if order.len() > shadowed {
+    if order.len() > chain.len() {
         let radius = scene_radius(scene, &scene.evaluate(0.0));
         let power: Vec<f32> = scene.lights.iter().map(|l| punctual_power(l, radius)).collect();
+        order.retain(|i| !chain.contains(i));
         order.sort_by(|&a, &b| power[b].total_cmp(&power[a]));
+        order.splice(0..0, chain.iter().copied());
     }
     order
 }
@@ -704,6 +743,37 @@ mod tests {
         (s, (0..count).collect())
     }
 
+    /// `chain_lights` ranking by power alone (nothing reaches a view): how many punctual lights
+    /// the chain takes, and its mesh lights.
+    fn by_power(s: &Scene, kept: &[usize], mesh_lights: bool) -> (usize, Vec<(u32, u32, u32)>) {
+        let (lights, meshes) = chain_lights(s, kept, mesh_lights, &|_| 0.0);
+        (lights.len(), meshes)
+    }
+
+    #[test]
+    fn the_chain_goes_to_the_lights_that_bring_the_most_to_the_view() {
+        let s = emissive_scene(Vec3::ONE, false);
+        let (bases, _) = emitter_bases(&s);
+        // Six point lights of 4 pi 100 outshine the lamp (2 pi); the view sees only lights 4
+        // and 5 and the lamp, the lamp most.
+        let (s, kept) = with_point_lights(&s, 6, 100.0);
+        let seen = |c: ChainCandidate| match c {
+            ChainCandidate::Punctual(4) => 1.0,
+            ChainCandidate::Punctual(5) => 2.0,
+            ChainCandidate::Mesh(1) => 3.0,
+            _ => 0.0,
+        };
+        let (lights, meshes) = chain_lights(&s, &kept, true, &seen);
+        // Then the brightest of those the view does not reach, in the scene's order.
+        assert_eq!((lights.clone(), meshes), (vec![5, 4, 0], vec![(1, bases[1], 2)]));
+        // They lead the shading order; the rest follow by power.
+        assert_eq!(shading_order(&s, &[], &lights), vec![5, 4, 0, 1, 2, 3]);
+        // With no more candidates than channels, the view is not asked.
+        let (lights, _) = chain_lights(&s, &kept[..3], true, &|_| panic!("asked"));
+        assert_eq!(lights, vec![0, 1, 2]);
+        assert_eq!(shading_order(&s, &[3, 4, 5], &lights), vec![0, 1, 2], "all in the chain: the scene's order");
+    }
+
     #[test]
     fn small_plain_emitters_rank_with_the_punctual_lights_for_the_chain() {
         let mut s = emissive_scene(Vec3::ONE, false);
@@ -723,19 +793,19 @@ mod tests {
         }
         let (bases, _) = emitter_bases(&s);
         // The bright quad first, then the first lamp; the textured quad and the sphere never.
-        let (punctual, chain) = chain_lights(&s, &[], true);
+        let (punctual, chain) = by_power(&s, &[], true);
         assert_eq!((punctual, chain.clone()), (0, vec![(2, bases[2], 2), (1, bases[1], 2)]));
-        assert_eq!(chain_lights(&s, &[], false), (0, vec![]), "--no-mesh-lights");
+        assert_eq!(by_power(&s, &[], false), (0, vec![]), "--no-mesh-lights");
         // Brighter point lights (4 pi 100 against the quads' 5 pi and 2 pi) come first.
         let (bright3, kept) = with_point_lights(&s, 3, 100.0);
-        assert_eq!(chain_lights(&bright3, &kept, true), (3, vec![(2, bases[2], 2)]), "one channel left by 3 lights");
+        assert_eq!(by_power(&bright3, &kept, true), (3, vec![(2, bases[2], 2)]), "one channel left by 3 lights");
         let (bright4, kept) = with_point_lights(&s, 4, 100.0);
-        assert_eq!(chain_lights(&bright4, &kept, true), (4, vec![]), "4 brighter lights leave none");
+        assert_eq!(by_power(&bright4, &kept, true), (4, vec![]), "4 brighter lights leave none");
         // Dimmer ones (4 pi 0.5 = 2 pi, the lamp's: a tie goes to the light) give the bright quad a
         // channel, and the lamp one only where fewer lights are kept.
         let (dim6, kept) = with_point_lights(&s, 6, 0.5);
-        assert_eq!(chain_lights(&dim6, &kept, true), (3, vec![(2, bases[2], 2)]));
-        assert_eq!(chain_lights(&dim6, &kept[..2], true), (2, vec![(2, bases[2], 2), (1, bases[1], 2)]));
+        assert_eq!(by_power(&dim6, &kept, true), (3, vec![(2, bases[2], 2)]));
+        assert_eq!(by_power(&dim6, &kept[..2], true), (2, vec![(2, bases[2], 2), (1, bases[1], 2)]));
         let chain: Vec<u32> = chain.iter().map(|c| c.0).collect();
         let flagged: Vec<u32> = emitters(&s, &s.evaluate(0.0), &chain)
             .iter()
@@ -778,15 +848,17 @@ mod tests {
     #[test]
     fn more_lights_than_the_shadowed_ones_are_ordered_brightest_first() {
         let s = crate::scene::builtin_many_lights::many_lights();
-        let order = shading_order(&s, &[], 4);
+        let all: Vec<usize> = (0..s.lights.len()).collect();
+        let (chain, _) = chain_lights(&s, &all, true, &|_| 0.0);
+        let order = shading_order(&s, &[], &chain);
         assert_eq!(order.len(), s.lights.len());
         let radius = scene_radius(&s, &s.evaluate(0.0));
         let p = |i: usize| punctual_power(&s.lights[i], radius);
         assert!(order.windows(2).all(|w| p(w[0]) >= p(w[1])));
         // A few lights keep the scene's order; excluded ones are left out.
         let s = builtin::soft_shadow_test();
-        assert_eq!(shading_order(&s, &[], 4), vec![0]);
-        assert!(shading_order(&s, &[0], 4).is_empty());
+        assert_eq!(shading_order(&s, &[], &[0]), vec![0]);
+        assert!(shading_order(&s, &[0], &[]).is_empty());
     }
 
     #[test]

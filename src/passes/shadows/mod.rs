@@ -31,8 +31,8 @@ pub const VISIBILITY: Output = filter::VISIBILITY;
 pub const HARD_VISIBILITY: Output = trace::RING0;
 /// The colour beside the visibility (see [`trace::TINT`]).
 pub const TINT: Output = trace::TINT;
-/// The first this many lights (the brightest: `world::lights::shading_order`) get the chain's
-/// visibility; the rest are resampled in gi.
+/// The first this many lights (those `world::lights::chain_lights` ranks first, leading
+/// `shading_order`) get the chain's visibility; the rest are resampled in gi.
 pub const MAX_SHADOWED_LIGHTS: usize = crate::world::lights::SHADOWED_LIGHTS;
 
 /// The named settings of the adaptive shadows.
