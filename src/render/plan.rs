@@ -10,9 +10,9 @@
 //! - Up to four punctual lights each get their own ray-traced visibility (exact and noise-free,
 //!   with adaptive soft shadows); with more, the four that bring the most direct light to the
 //!   first view keep it (render::light_view; small emissive meshes compete for it too) and the
-//!   rest are resampled in gi: one light per pixel from candidates drawn from the light grid (each cell
-//!   lists the lights whose range reaches it) and the pixel's reservoir of last frame, with
-//!   shadow rays, so the cost per pixel does not grow with their number (see
+//!   rest are resampled in gi: one light per pixel from candidates drawn from the light grid
+//!   (each cell lists the lights whose range reaches it) and the pixel's reservoir of last
+//!   frame, with shadow rays, so the cost per pixel does not grow with their number (see
 //!   world::lights::shading_order, world::light_grid and shaders-glsl/common/light_reservoir.glsl).
 //! - Instances share one bottom-level structure per unique mesh (reported; always so).
 //! - GI runs every frame when any surface has a diffuse albedo or is rough enough for its
