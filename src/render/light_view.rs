@@ -143,6 +143,9 @@ impl<'a> LightView<'a> {
     }
 
     /// Whether a ray from `p` toward `l` passes `dist` without an opaque surface in the way.
+    /// Thin glass and masked or blended surfaces are alpha-tested instances whose candidates the
+    /// closure turns down, so the ray passes them as sky_reach's walks do; a volume's surface
+    /// is hit and crossed in the loop.
     fn arrives(&self, p: Vec3, l: Vec3, dist: f32) -> bool {
         let mut origin = p;
         let mut left = dist;
@@ -199,6 +202,71 @@ mod tests {
                 assert!(b > 0.0, "{name}");
             }
         }
+    }
+
+    /// A floor seen from above between two walls, an opaque one and a glass one, with a light
+    /// behind each, two spots over it (one turned away) and a sun.
+    #[test]
+    fn what_a_light_brings_follows_its_kind_and_what_stands_in_the_way() {
+        use crate::scene::builtin::{node, quad};
+        use crate::scene::{Instance, Light, LightKind, Material};
+        let mut s = Scene::default();
+        s.materials.push(Material { name: "white".into(), ..Default::default() });
+        // A volume's surface: thin glass is not even a candidate for these rays (its instance is
+        // alpha-tested, and the closure turns its candidates down), a volume's is crossed here.
+        s.materials.push(Material { name: "glass".into(), transmission: 1.0, thickness: 0.1, ..Default::default() });
+        let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+        // The floor faces up (Z x X); the walls stand at x = 2.5 (opaque) and x = -2.5 (glass).
+        let meshes = [
+            quad(Vec3::ZERO, z * 4.0, x * 4.0, 0),
+            quad(Vec3::new(2.5, 2.5, 0.0), y * 5.0, z * 10.0, 0),
+            quad(Vec3::new(-2.5, 2.5, 0.0), y * 5.0, z * 10.0, 1),
+        ];
+        for (k, mesh) in meshes.into_iter().enumerate() {
+            s.meshes.push(mesh);
+            s.nodes.push(node(&format!("mesh {k}"), Vec3::ZERO));
+            s.instances.push(Instance { mesh: k as u32, node: k as u32 });
+        }
+        let down = glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+        let spot = LightKind::Spot { inner_cone: 0.3, outer_cone: 0.6 };
+        let lights = [
+            ("behind the wall", LightKind::Point, Vec3::new(3.0, 1.0, 0.0), glam::Quat::IDENTITY),
+            ("behind the glass", LightKind::Point, Vec3::new(-3.0, 1.0, 0.0), glam::Quat::IDENTITY),
+            ("spot down", spot, Vec3::new(0.0, 2.0, 0.0), down),
+            ("spot up", spot, Vec3::new(0.0, 2.0, 0.0), down.inverse()),
+            ("sun", LightKind::Directional, Vec3::new(0.0, 5.0, 0.0), down),
+        ];
+        for (name, kind, at, rotation) in lights {
+            let mut n = node(name, at);
+            n.rotation = rotation;
+            s.nodes.push(n);
+            let node = s.nodes.len() as u32 - 1;
+            s.lights.push(Light {
+                name: name.into(),
+                kind,
+                color: Vec3::ONE,
+                intensity: 1.0,
+                range: None,
+                radius: 0.0,
+                node,
+            });
+        }
+        let eye = Vec3::new(0.0, 4.0, 3.0);
+        let view = crate::render::camera::perspective(
+            glam::Mat4::look_at_rh(eye, Vec3::ZERO, Vec3::Y),
+            eye,
+            0.8,
+            1.0,
+            0.05,
+            100.0,
+        );
+        let seen = LightView::new(&s, &view);
+        assert!(seen.surfaces() > 0);
+        let brings: Vec<f32> = (0..s.lights.len()).map(|i| seen.brings(ChainCandidate::Punctual(i))).collect();
+        assert_eq!(brings[0], 0.0, "through the opaque wall: {brings:?}");
+        assert!(brings[1] > 0.0, "glass lets it through: {brings:?}");
+        assert!(brings[2] > 0.0 && brings[3] == 0.0, "the spots: {brings:?}");
+        assert!(brings[4] > 0.0, "the sun: {brings:?}");
     }
 
     /// Ranked by power, two of the four channels went to the sealed room's sphere lights (and
