@@ -15,7 +15,7 @@ use super::sky_reach::Surface;
 use crate::accel::bvh::{SceneBvh, closest_hit};
 use crate::scene::{Pose, Scene};
 use crate::world::environment::luminance;
-use crate::world::lights::{ChainCandidate, EMITTER_DOUBLE_SIDED, GpuEmitter, emitters};
+use crate::world::lights::{ChainCandidate, EMITTER_DOUBLE_SIDED, GpuEmitter, centroid, emitters};
 use crate::world::scene_gpu::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT, gpu_lights};
 use glam::{Vec2, Vec3};
 
@@ -127,8 +127,7 @@ impl<'a> LightView<'a> {
     /// a point at its centroid (Le A cos cos / d^2, the distance kept above the triangle's
     /// size), where it arrives.
     fn triangle(&self, e: &GpuEmitter, p: Vec3, n: Vec3) -> f32 {
-        let centroid = Vec3::from(e.p0) + (Vec3::from(e.e1) + Vec3::from(e.e2)) / 3.0;
-        let to = centroid - p;
+        let to = centroid(e) - p;
         let d = to.length();
         let l = to / d.max(1e-12);
         let facing = -Vec3::from(e.normal).dot(l);

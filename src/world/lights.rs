@@ -599,7 +599,8 @@ fn group_points(scene: &Scene, emitters: &[GpuEmitter]) -> Vec<(Vec3, f32)> {
         .collect()
 }
 
-fn centroid(e: &GpuEmitter) -> Vec3 {
+/// An emitter triangle's centroid.
+pub(crate) fn centroid(e: &GpuEmitter) -> Vec3 {
     Vec3::from(e.p0) + (Vec3::from(e.e1) + Vec3::from(e.e2)) / 3.0
 }
 
