@@ -47,8 +47,7 @@ impl Viewer {
                     "orbit" => self.set_camera_mode(Mode::Orbit),
                     _ => {
                         let choice: CameraChoice = name.parse().unwrap_or_default();
-                        self.renderer.set_camera(&choice)?;
-                        self.camera.mode = Mode::Scene;
+                        self.switch_camera(&choice)?;
                     }
                 },
                 Command::Pause => self.clock.playing = false,
@@ -68,6 +67,15 @@ impl Viewer {
         }
     }
 
+    /// Shows the scene through one of its cameras (a camera cut); the shadows chain is ranked
+    /// at its view.
+    pub(super) fn switch_camera(&mut self, choice: &CameraChoice) -> Result<()> {
+        self.renderer.set_camera(choice)?;
+        self.camera.mode = Mode::Scene;
+        self.rank_chain();
+        Ok(())
+    }
+
     pub(super) fn set_view(&mut self, view: Resource) -> Result<()> {
         if self.renderer.graph.image(view).is_none() {
             bail!("no pass output named {view} in this frame");
@@ -80,10 +88,7 @@ impl Viewer {
     pub(super) fn ui_action(&mut self, action: ui::Action) {
         let result = match action {
             ui::Action::View(view) => self.set_view(view),
-            ui::Action::SceneCamera(i) => {
-                self.camera.mode = Mode::Scene;
-                self.renderer.set_camera(&CameraChoice::Index(i))
-            }
+            ui::Action::SceneCamera(i) => self.switch_camera(&CameraChoice::Index(i)),
             ui::Action::CameraMode(mode) => {
                 self.set_camera_mode(mode);
                 Ok(())

@@ -99,8 +99,7 @@ impl Viewer {
             KeyCode::F12 | KeyCode::KeyP => self.pending_screenshot = Some(self.next_free("screenshot_", ".png")),
             KeyCode::KeyC if !self.cameras.is_empty() => {
                 let next = self.renderer.camera_index().map_or(0, |i| (i + 1) % self.cameras.len());
-                self.renderer.set_camera(&CameraChoice::Index(next))?;
-                self.camera.mode = Mode::Scene;
+                self.switch_camera(&CameraChoice::Index(next))?;
             }
             _ => {}
         }

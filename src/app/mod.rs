@@ -10,6 +10,7 @@
 //! Scripts (`--script`, see [`script`]) make runs reproducible for tests.
 
 mod camera;
+mod chain_follow;
 mod commands;
 mod hot_reload;
 mod input;
@@ -175,6 +176,8 @@ struct Viewer {
     last_frame: Instant,
     /// When the window was last resized: the render size follows once it settles.
     resized_at: Option<Instant>,
+    /// When the camera comes to rest, the shadows chain is ranked at its view.
+    rest: chain_follow::RestWatch,
 }
 
 impl Viewer {
@@ -243,6 +246,7 @@ impl Viewer {
             frame_ms: 0.0,
             last_frame: Instant::now(),
             resized_at: None,
+            rest: Default::default(),
         })
     }
 
@@ -263,6 +267,9 @@ impl Viewer {
             self.apply_settings();
         }
         self.move_camera();
+        if self.rest.rested(self.camera.view_override(), now) {
+            self.rank_chain();
+        }
         self.render()?;
         let shot = self.pending_screenshot.take();
         if let Err(e) = self.present(shot.as_deref()) {

@@ -129,6 +129,12 @@ pub struct Renderer {
     pub plan: plan::FramePlan,
     /// Which environment lights the scene, and why (the default light or not).
     pub lighting: default_light::Lighting,
+    /// The scene's lights as loaded, before the plan culled and ordered them: the shadows
+    /// chain is ranked again from these (`rank_chain_for`).
+    loaded_lights: Vec<crate::scene::Light>,
+    /// What `scene_gpu` was uploaded with, to upload it again.
+    environment: crate::world::environment::EnvironmentData,
+    backend: Backend,
     pub ctx: Arc<Context>,
     pool: CommandPool,
     pub scene: Scene,
@@ -182,6 +188,23 @@ pub struct ViewOverride {
     pub zfar: f32,
 }
 
+/// The frame plan of `scene` (its lights as loaded) under `settings`; the shadows chain ranked
+/// by what its lights bring to `view` where `settings.chain_by_view` asks for it.
+fn frame_plan(scene: &Scene, settings: &Settings, view: &View) -> plan::FramePlan {
+    let ranked_by = settings.chain_by_view.then_some(view);
+    if settings.full {
+        plan::FramePlan::full(scene, settings.mesh_lights, ranked_by)
+    } else {
+        plan::FramePlan::for_scene(
+            scene,
+            settings.reflections.roughness_cutoff,
+            settings.light_grid,
+            settings.mesh_lights,
+            ranked_by,
+        )
+    }
+}
+
 /// The passes of a frame for `settings`, the images the CPU feeds into it and its HDR output.
 fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> Result<frame::HybridFrame> {
     Ok(match settings.mode {
@@ -221,20 +244,10 @@ impl Renderer {
         }
         // The shadows chain's lights are ranked by what they bring to the first view.
         let first_view = camera::first_view(&scene, camera, settings.width, settings.height)?;
-        let ranked_by = settings.chain_by_view.then_some(&first_view);
-        let plan = if settings.full {
-            plan::FramePlan::full(&scene, settings.mesh_lights, ranked_by)
-        } else {
-            plan::FramePlan::for_scene(
-                &scene,
-                settings.reflections.roughness_cutoff,
-                settings.light_grid,
-                settings.mesh_lights,
-                ranked_by,
-            )
-        };
+        let plan = frame_plan(&scene, &settings, &first_view);
+        let loaded_lights = scene.lights.clone();
         // The culled lights out, the rest in shading order (the shadowed ones first).
-        scene.lights = plan.light_order.iter().map(|&i| scene.lights[i].clone()).collect();
+        scene.lights = plan.light_order.iter().map(|&i| loaded_lights[i].clone()).collect();
         let limit = ctx.caps.max_image_dimension_2d;
         if settings.width == 0 || settings.height == 0 || settings.width > limit || settings.height > limit {
             bail!(
@@ -271,6 +284,9 @@ impl Renderer {
         Ok(Self {
             plan,
             lighting,
+            loaded_lights,
+            environment,
+            backend,
             ctx: ctx.clone(),
             pool,
             scene,
@@ -321,6 +337,86 @@ impl Renderer {
         self.last_pass_times.clear();
         self.camera_cut();
         Ok(())
+    }
+
+    /// Ranks the shadows chain's lights again by what they bring to `view` (the plan ranked them
+    /// by the first view; the viewer asks again where its camera comes to rest, and after a
+    /// switch of cameras). Where that gives the chain other lights, the scene's lights and their
+    /// tables are uploaded again in the new order and the frame is rebuilt (with or without the
+    /// soft-shadow passes, as the new lights need): every temporal history starts anew.
+    /// Returns whether the chain changed; nothing changes where the settings rank by power, or
+    /// four lights or fewer compete. On error the old frame stays as it was.
+    pub fn rank_chain_for(&mut self, shaders: &ShaderLibrary, view: &View) -> Result<bool> {
+        if !self.settings.chain_by_view || matches!(self.settings.mode, RenderMode::Reference { .. }) {
+            return Ok(false);
+        }
+        let start = std::time::Instant::now();
+        let shown = std::mem::replace(&mut self.scene.lights, self.loaded_lights.clone());
+        let plan = frame_plan(&self.scene, &self.settings, view);
+        if plan.same_chain(&self.plan) {
+            self.scene.lights = shown;
+            return Ok(false);
+        }
+        self.scene.lights = plan.light_order.iter().map(|&i| self.loaded_lights[i].clone()).collect();
+        let rebuilt = self.upload_with(shaders, &plan);
+        if rebuilt.is_err() {
+            self.scene.lights = shown;
+        }
+        let (scene_gpu, graph, parts) = rebuilt?;
+        log::info!(
+            "shadows chain of {} ranked again at the view from {}: {} (scene uploaded again and frame rebuilt \
+             in {:.0} ms)",
+            self.scene.name,
+            view.position,
+            plan.chain_names(&self.loaded_lights, &self.scene),
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        // The old graph's pipelines use the old scene's descriptor set layout: it goes first.
+        self.graph = graph;
+        self.scene_gpu = scene_gpu;
+        self.plan = plan;
+        self.injected = parts.injected;
+        self.hdr_output = parts.hdr_output;
+        self.radiance_cache = parts.radiance_cache;
+        self.ray_batch = None;
+        self.last_pass_times.clear();
+        self.prev_view = None;
+        self.camera_cut();
+        Ok(true)
+    }
+
+    /// The names of the shadows chain's lights, punctual and mesh lights.
+    pub fn chain_names(&self) -> String {
+        self.plan.chain_names(&self.loaded_lights, &self.scene)
+    }
+
+    /// The scene on the GPU and the frame's passes for `plan`, with `self.scene`'s lights.
+    fn upload_with(
+        &self,
+        shaders: &ShaderLibrary,
+        plan: &plan::FramePlan,
+    ) -> Result<(SceneGpu, Graph, frame::HybridFrame)> {
+        let pose = self.pose_of(self.frame_index);
+        let scene_gpu = SceneGpu::upload(
+            &self.ctx,
+            &self.pool,
+            shaders,
+            &self.scene,
+            &pose,
+            self.backend,
+            &self.environment,
+            self.settings.brdf,
+            self.settings.light_grid,
+            crate::world::lights::ChainLights {
+                punctual: plan.chain_punctual,
+                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
+            },
+        )?;
+        let b = PassBuilder { ctx: &self.ctx, shaders, scene: &scene_gpu };
+        let mut parts = frame_parts(&b, &self.settings, plan)?;
+        let extent = vk::Extent2D { width: self.settings.width, height: self.settings.height };
+        let graph = Graph::new(&self.ctx, std::mem::take(&mut parts.passes), extent)?;
+        Ok((scene_gpu, graph, parts))
     }
 
     /// Replaces the scene's camera by `view` from the next frame on (`None`: the scene's

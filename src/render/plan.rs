@@ -71,6 +71,28 @@ impl FramePlan {
         self.resampled_lights > 0 || self.emitters > 0
     }
 
+    /// Whether `other` gives the shadows chain the same lights, in whatever order (another
+    /// order would only move them between channels).
+    pub fn same_chain(&self, other: &FramePlan) -> bool {
+        let chain = |p: &FramePlan| {
+            let mut punctual = p.light_order[..p.chain_punctual].to_vec();
+            let mut meshes = p.chain_emitters.clone();
+            punctual.sort_unstable();
+            meshes.sort_unstable();
+            (punctual, meshes)
+        };
+        chain(self) == chain(other)
+    }
+
+    /// The names of the shadows chain's lights: the punctual ones from `lights` (the scene's
+    /// as loaded, which `light_order` indexes), then the mesh lights' instances.
+    pub fn chain_names(&self, lights: &[crate::scene::Light], scene: &Scene) -> String {
+        let punctual = self.light_order[..self.chain_punctual].iter().map(|&i| lights[i].name.as_str());
+        let meshes = self.chain_emitters.iter().map(|&(i, ..)| instance_name(scene, i));
+        let names: Vec<&str> = punctual.chain(meshes).collect();
+        if names.is_empty() { "no light".into() } else { names.join(", ") }
+    }
+
     /// Everything on (`--full`); `mesh_lights` and `view` as in [`FramePlan::for_scene`].
     pub fn full(scene: &Scene, mesh_lights: bool, view: Option<&View>) -> Self {
         let kept: Vec<usize> = (0..scene.lights.len()).collect();
