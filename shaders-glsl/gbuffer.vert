@@ -17,8 +17,9 @@ void main() {
     InstanceInfo inst = instances[gl_InstanceIndex];
     Vertex v = vertices[gl_VertexIndex];
     vec4 world = inst.object_to_world * vec4(v.position, 1.0);
-    // A skinned vertex also moved within its mesh: skinning.comp kept where it was.
-    vec3 prev_position = (inst.flags & INSTANCE_SKINNED) != 0u ? prev_positions[gl_VertexIndex] : v.position;
+    // A deforming vertex also moved within its mesh: skinning.comp or the morph deformer kept
+    // where it was.
+    vec3 prev_position = (inst.flags & INSTANCE_DEFORMS) != 0u ? prev_positions[gl_VertexIndex] : v.position;
     vec4 prev_world = inst.prev_object_to_world * vec4(prev_position, 1.0);
     mat3 nm = mat3(inst.normal_to_world);
     out_world = world.xyz;

@@ -6,7 +6,8 @@
 //!   refits, on the frame of the rebuild and after it;
 //! - the compute backend's refit tree finds exactly the hits of a tree built from scratch over
 //!   the deformed vertices;
-//! - the refit/rebuild schedule runs as [`REBUILD_EVERY`] says, and validation stays clean.
+//! - the refit/rebuild schedule runs as [`REBUILD_EVERY`] says, and validation stays clean;
+//! - the G-buffer's motion vectors carry the morphed motion, and none once the weights hold.
 //!
 //! The agreement rules (and the edge ties they allow) are those of tests/backends.rs.
 
@@ -200,4 +201,68 @@ fn gltf_morph_asset_loads_as_a_deforming_mesh() {
     let centre = bumped.iter().map(|v| v.position[2]).fold(0.0, f32::max);
     assert!((centre - 0.5).abs() < 1e-3, "bump height {centre}");
     assert!(bumped.iter().any(|v| v.normal != [0.0, 0.0, 1.0]));
+}
+
+/// The sheet's one morph target moves it sideways by this much at weight 1.
+const SHIFT: f32 = 2.0;
+
+/// Morphing is in the G-buffer's motion vectors, as skinning is: the morph test's sheet with one
+/// target that shifts it along x (weight 0 -> 1 over the first second, then held), so that its
+/// vertices move within the mesh while its node stands still. While it moves, the motion at a
+/// sheet pixel is where the CPU's morph puts that point now against last frame (2.6 px a
+/// frame here); the back wall does not move; once the weight holds, the sheet's motion is 0
+/// again. Without last frame's morphed positions the sheet's motion read 0 while it moved.
+#[test]
+fn morph_motion_is_in_the_motion_vectors() {
+    let mut scene = builtin::morph_test();
+    let morph = &mut scene.morphs[0];
+    let count = scene.meshes[morph.mesh as usize].vertices.len();
+    morph.targets =
+        vec![hybrid_rt::scene::MorphTarget { positions: vec![Vec3::X * SHIFT; count], normals: Vec::new() }];
+    morph.weights = vec![0.0];
+    morph.channels[0].times = vec![0.0, 1.0, facts::PERIOD];
+    morph.channels[0].values = vec![0.0, 1.0, 1.0];
+    let settings =
+        Settings { width: W, height: H, frame_dt: 0.1, start_time: 0.05, denoiser: false, ..Default::default() };
+    let ctx = common::validated_context();
+    let mut r = common::renderer(&ctx, scene, settings, Backend::Compute);
+    // Vertex (column 8, row 24) of the sheet: x = -1 at rest, in view wherever the shift puts it.
+    let vertex = (facts::CELLS / 2 * (facts::CELLS + 1) + 8) as usize;
+    let names = [passes::gbuffer::IDS, passes::gbuffer::MOTION];
+    let check = |r: &mut Renderer, frames: u32| {
+        common::render_frames(r, frames);
+        let img = r.read_outputs(&names).unwrap();
+        let morph = &r.scene.morphs[0];
+        let base = &r.scene.meshes[morph.mesh as usize].vertices;
+        let size = glam::Vec2::new(W as f32, H as f32);
+        let at = |f: u32| {
+            let pose = r.pose_of(f);
+            let p = Vec3::from(morph.deform(base, &morph.weights_at(pose.time))[vertex].position);
+            let world = pose.world[r.scene.instances[facts::SHEET_INSTANCE as usize].node as usize].transform_point3(p);
+            let clip = r.view_of(&pose).view_proj() * world.extend(1.0);
+            clip.truncate().truncate() / clip.w * 0.5 * size
+        };
+        let frame = r.frame_index - 1;
+        let (now, before) = (at(frame), at(frame - 1));
+        let expected = now - before;
+        let pixel = now + size * 0.5;
+        let (x, y) = (pixel.x as u32, pixel.y as u32);
+        assert_eq!(img[0].get_u32(x, y, 0), facts::SHEET_INSTANCE, "frame {frame}: the point lands on the sheet");
+        let motion = glam::Vec2::new(img[1].get(x, y, 0), img[1].get(x, y, 1));
+        let wall = glam::Vec2::new(img[1].get(2, 2, 0), img[1].get(2, 2, 1));
+        assert_eq!(img[0].get_u32(2, 2, 0), facts::BACK_INSTANCE);
+        assert!(wall.length() < 1e-3, "frame {frame}: the wall moves {wall}");
+        eprintln!("frame {frame}: sheet motion {motion} px at ({x},{y}), the CPU's morph {expected} px");
+        (motion, expected)
+    };
+    // Frames 0..3 (t = 0.05 .. 0.35): moving.
+    let (motion, expected) = check(&mut r, 4);
+    assert!(expected.length() > 1.0, "the sheet moves {expected} px a frame: too little to test");
+    assert!((motion - expected).length() < 0.1 * expected.length() + 0.3, "moving: {motion} against {expected}");
+    // Frame 11 (t = 1.15): the weight has held at 1 since t = 1.
+    let (motion, expected) = check(&mut r, 8);
+    assert_eq!(expected, glam::Vec2::ZERO);
+    assert!(motion.length() < 1e-3, "held: the sheet still moves {motion}");
+    drop(r);
+    common::assert_validation_clean(ctx);
 }

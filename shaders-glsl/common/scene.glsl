@@ -16,8 +16,9 @@ struct MeshInfo {
 };
 
 #define INSTANCE_ALPHA_MASKED 1u
-// The mesh is skinned: last frame's positions are in `prev_positions` (motion vectors).
-#define INSTANCE_SKINNED 2u
+// The mesh deforms (skinned or morphed): last frame's positions are in `prev_positions`
+// (motion vectors).
+#define INSTANCE_DEFORMS 2u
 
 struct InstanceInfo {
     mat4 object_to_world;

@@ -41,7 +41,7 @@ pub mod binding {
     pub const ENV_CDF: u32 = 16;
     /// The material model and the specular directional-albedo table (src/world/brdf.rs).
     pub const BRDF_DATA: u32 = 17;
-    /// Last frame's positions of skinned vertices (src/world/skinning.rs).
+    /// Last frame's positions of deforming vertices (src/world/skinning.rs, deform.rs).
     pub const PREV_POSITIONS: u32 = 18;
     /// The light grid over the resampled lights (src/world/light_grid.rs): header and cells,
     /// then the cells' entries.
@@ -63,9 +63,9 @@ pub struct GpuMesh {
 }
 
 pub const INSTANCE_ALPHA_MASKED: u32 = 1;
-/// The instance's mesh is skinned: the G-buffer reads last frame's positions from
-/// `prev_positions`. Mirrors INSTANCE_SKINNED in common/scene.glsl.
-pub const INSTANCE_SKINNED: u32 = 2;
+/// The instance's mesh deforms (skinned or morphed): the G-buffer reads last frame's positions
+/// from `prev_positions`. Mirrors INSTANCE_DEFORMS in common/scene.glsl.
+pub const INSTANCE_DEFORMS: u32 = 2;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -190,8 +190,8 @@ pub struct SceneGpu {
     /// Whether the lights written by the last `update_pose` differ from the frame's before.
     pub lights_changed: bool,
     deformer: Option<super::deform::Deformer>,
-    /// One vec3 per vertex: where skinned vertices were last frame.
-    _prev_positions: Buffer,
+    /// One vec3 per vertex: where deforming vertices were last frame.
+    prev_positions: Buffer,
     skinner: Option<super::skinning::Skinner>,
 }
 
@@ -280,14 +280,15 @@ impl SceneGpu {
         let accel = accel::create(backend, ctx, pool, scene, pose, &geometry)?;
         let base_vertex: Vec<i32> = mesh_table.iter().map(|m| m.base_vertex).collect();
         let deformer = super::deform::Deformer::new(ctx, scene, &base_vertex, backend == Backend::RayQuery)?;
-        // Only skinned vertices are ever read from it; without skins it is one element.
-        let skinned_vertices =
-            if scene.skinned.is_empty() { 1 } else { scene.meshes.iter().map(|m| m.vertices.len()).sum() };
+        // Only deforming vertices are ever read from it; where none deforms it is one element.
+        let deforming = !scene.skinned.is_empty() || !scene.morphs.is_empty();
+        let indexed_vertices = if deforming { scene.meshes.iter().map(|m| m.vertices.len()).sum() } else { 1 };
         let prev_positions = Buffer::new(
             ctx,
             "scene.prev_positions",
-            (skinned_vertices * size_of::<[f32; 3]>()) as u64,
-            storage,
+            (indexed_vertices * size_of::<[f32; 3]>()) as u64,
+            // The skinning pass writes its meshes' range, the deformer copies the morphs' in.
+            storage | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
         let skinner = super::skinning::Skinner::new(
@@ -340,7 +341,7 @@ impl SceneGpu {
             prev_lights: None,
             lights_changed: true,
             deformer,
-            _prev_positions: prev_positions,
+            prev_positions,
             skinner,
         };
         gpu.update_pose(scene, pose)?;
@@ -357,14 +358,14 @@ impl SceneGpu {
                 let m = pose.world[inst.node as usize];
                 let mesh = &scene.meshes[inst.mesh as usize];
                 let masked = scene.materials[mesh.material as usize].alpha_mode.cutoff().is_some();
-                let skinned = scene.skinned_of(inst.mesh).is_some();
+                let deforms = scene.deforms(inst.mesh);
                 GpuInstance {
                     object_to_world: mat(m),
                     prev_object_to_world: mat(prev[inst.node as usize]),
                     normal_to_world: mat(m.inverse().transpose()),
                     mesh: inst.mesh,
                     material: mesh.material,
-                    flags: if masked { INSTANCE_ALPHA_MASKED } else { 0 } | if skinned { INSTANCE_SKINNED } else { 0 },
+                    flags: if masked { INSTANCE_ALPHA_MASKED } else { 0 } | if deforms { INSTANCE_DEFORMS } else { 0 },
                     pad: 0,
                 }
             })
@@ -404,7 +405,7 @@ impl SceneGpu {
         staged::record_copies(rec, &mut [&mut self.instances, &mut self.lights]);
         self.light_tables.record(rec);
         if let Some(deformer) = &mut self.deformer {
-            deformer.record(rec, &self.vertices);
+            deformer.record(rec, &self.vertices, &self.prev_positions);
         }
         if let Some(skinner) = &mut self.skinner {
             skinner.record(rec);
