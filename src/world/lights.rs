@@ -148,6 +148,9 @@ pub struct LightTables {
     grid_enabled: bool,
     /// Instances whose material emits, and their transforms when the table was last built.
     emissive: Vec<u32>,
+    /// Emissive meshes that deform (morph targets, skins): their vertices' object-space
+    /// positions as last deformed, which the emitters are built from in place of the mesh's.
+    shapes: Shapes,
     /// The instances that are mesh lights of the shadows chain (the frame plan's).
     chain: Vec<u32>,
     /// The punctual lights with a channel of the chain, which the grid leaves out.
@@ -255,12 +258,13 @@ impl LightTables {
             chain: chain.meshes.to_vec(),
             chain_punctual: chain.punctual,
             built_for: None,
+            shapes: Shapes::new(),
             punctual_powers,
             env_power: 4.0 * PI * PI * radius * radius * luminance(env.mean),
             env_header: (env.width, env.height, env.constant.to_array()),
             sky: env.mean,
         };
-        tables.update(scene, pose)?;
+        tables.update(scene, pose, &[])?;
         Ok(tables)
     }
 
@@ -377,15 +381,26 @@ impl LightTables {
         }
     }
 
-    /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build;
-    /// true when it did (the first call always does).
-    pub fn update(&mut self, scene: &Scene, pose: &Pose) -> Result<bool> {
+    /// Rebuilds the emitters and the CDF when an emissive instance moved since the last build,
+    /// or an emissive mesh deformed (`deformed`: this frame's (mesh, object-space positions)
+    /// of the deforming meshes, from the morph deformer and the skinning); true when it did
+    /// (the first call always does).
+    pub fn update(&mut self, scene: &Scene, pose: &Pose, deformed: &[(u32, Vec<Vec3>)]) -> Result<bool> {
         let now: Vec<Mat4> =
             self.emissive.iter().map(|&i| pose.world[scene.instances[i as usize].node as usize]).collect();
-        if self.built_for.as_ref() == Some(&now) {
+        let mut reshaped = false;
+        for (mesh, positions) in deformed {
+            // (The skinning leaves a mesh's positions out where only the GPU needs them: never
+            // for an emissive one.)
+            if !positions.is_empty() && scene.materials[scene.meshes[*mesh as usize].material as usize].is_emissive() {
+                self.shapes.insert(*mesh, positions.clone());
+                reshaped = true;
+            }
+        }
+        if self.built_for.as_ref() == Some(&now) && !reshaped {
             return Ok(false);
         }
-        let emitters = emitters(scene, pose, &self.chain);
+        let emitters = emitters_shaped(scene, pose, &self.chain, &self.shapes);
         let mut powers: Vec<(u32, u32, f32)> = Vec::with_capacity(self.punctual_powers.len() + emitters.len() + 1);
         powers.extend(self.punctual_powers.iter().enumerate().map(|(i, &p)| (LIGHT_KIND_PUNCTUAL, i as u32, p)));
         powers
@@ -538,13 +553,24 @@ fn mesh_light_candidates(scene: &Scene) -> Vec<((u32, u32, u32), f32)> {
     candidates
 }
 
-/// Every triangle of every emissive instance in world space, in emitter order; those of the
-/// instances in `chain` (the shadows chain's mesh lights) flagged EMITTER_IN_CHAIN.
+/// Object-space vertex positions of deformed meshes, by mesh, in place of their vertices'.
+pub type Shapes = std::collections::HashMap<u32, Vec<Vec3>>;
+
+/// Every triangle of every emissive instance in world space, in emitter order, each mesh in
+/// its undeformed shape; those of the instances in `chain` (the shadows chain's mesh lights)
+/// flagged EMITTER_IN_CHAIN.
 pub fn emitters(scene: &Scene, pose: &Pose, chain: &[u32]) -> Vec<GpuEmitter> {
+    emitters_shaped(scene, pose, chain, &Shapes::new())
+}
+
+/// `emitters`, with the deformed meshes in `shapes` in their deformed shape.
+fn emitters_shaped(scene: &Scene, pose: &Pose, chain: &[u32], shapes: &Shapes) -> Vec<GpuEmitter> {
     let mut out = Vec::new();
     for i in emissive_instances(scene) {
         let inst = &scene.instances[i as usize];
         let mesh = &scene.meshes[inst.mesh as usize];
+        let shape = shapes.get(&inst.mesh);
+        let position = |v: u32| shape.map_or(Vec3::from(mesh.vertices[v as usize].position), |s| s[v as usize]);
         let world = pose.world[inst.node as usize];
         // A mirroring transform flips the winding; the front side stays where the object-space
         // winding puts it, which is the side the ray backends call front.
@@ -552,7 +578,7 @@ pub fn emitters(scene: &Scene, pose: &Pose, chain: &[u32]) -> Vec<GpuEmitter> {
         let sides = if scene.materials[mesh.material as usize].double_sided { EMITTER_DOUBLE_SIDED } else { 0 };
         let flags = sides | if chain.contains(&i) { EMITTER_IN_CHAIN } else { 0 };
         for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
-            let p = |k: usize| world.transform_point3(Vec3::from(mesh.vertices[tri[k] as usize].position));
+            let p = |k: usize| world.transform_point3(position(tri[k]));
             let (p0, p1, p2) = (p(0), p(1), p(2));
             let (e1, e2) = (p1 - p0, p2 - p0);
             let cross = e1.cross(e2);

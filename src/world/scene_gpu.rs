@@ -392,7 +392,7 @@ impl SceneGpu {
             self.accel.update_geometry(scene, pose, &meshes)?;
         }
         self.accel.update_instances(scene, pose)?;
-        let emitters_moved = self.light_tables.update(scene, pose)?;
+        let emitters_moved = self.light_tables.update(scene, pose, &changed)?;
         self.lights_changed = punctual_changed || emitters_moved;
         self.prev_world = Some(pose.world.clone());
         Ok(())

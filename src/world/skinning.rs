@@ -141,8 +141,9 @@ impl Skinner {
 
     /// Writes the joint matrices of the meshes whose joints moved (or stopped moving: their
     /// last-frame positions must catch up) and stages their dispatch; returns (mesh, skinned
-    /// positions) for each whose shape changed, for the ray backend. With ray query the
-    /// positions are left empty: the BLAS update reads the GPU's vertices.
+    /// positions) for each whose shape changed, for the ray backend and the light table. With
+    /// ray query the positions are left empty unless the mesh emits: the BLAS update reads the
+    /// GPU's vertices.
     pub fn update(&mut self, scene: &Scene, pose: &Pose) -> Result<Vec<(u32, Vec<Vec3>)>> {
         let mut changed = Vec::new();
         for (k, s) in scene.skinned.iter().enumerate() {
@@ -162,10 +163,12 @@ impl Skinner {
                 self.pending.push(k);
             }
             if moved {
-                let positions = if self.ray_query {
+                let mesh = &scene.meshes[s.mesh as usize];
+                // The compute backend refits its BVH from them, and an emissive mesh's light
+                // table is built from them; a BLAS update reads the GPU's vertices.
+                let positions = if self.ray_query && !scene.materials[mesh.material as usize].is_emissive() {
                     Vec::new()
                 } else {
-                    let mesh = &scene.meshes[s.mesh as usize];
                     s.skin(&mesh.vertices, now).iter().map(|v| Vec3::from(v.position)).collect()
                 };
                 changed.push((s.mesh, positions));
