@@ -522,7 +522,7 @@ fn panels_and_dim_lights() -> Scene {
 fn the_brightest_lights_take_the_chain_whatever_their_kind() {
     const FRAMES: u32 = 32;
     let s = panels_and_dim_lights();
-    let plan = hybrid_rt::render::plan::FramePlan::for_scene(&s, 0.6, true, true, Some(&first_view(&s)));
+    let plan = hybrid_rt::render::plan::FramePlan::for_scene(&s, 0.6, true, true, &[first_view(&s)]);
     let chain: Vec<&str> =
         plan.chain_emitters.iter().map(|c| s.nodes[s.instances[c.0 as usize].node as usize].name.as_str()).collect();
     assert_eq!(plan.chain_punctual, 0, "{:?}", plan.reasons);

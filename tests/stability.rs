@@ -217,7 +217,7 @@ fn light_off() {
 /// The lights the suite's frame resamples in gi (its renderer ranks the shadows chain by power,
 /// `bench::stability`'s `renderer`), as indices into the scene's lights.
 fn resampled_lights(scene: &hybrid_rt::scene::Scene) -> Vec<usize> {
-    let plan = hybrid_rt::render::plan::FramePlan::for_scene(scene, 0.6, true, true, None);
+    let plan = hybrid_rt::render::plan::FramePlan::for_scene(scene, 0.6, true, true, &[]);
     plan.light_order[plan.chain_punctual..].to_vec()
 }
 

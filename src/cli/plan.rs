@@ -28,13 +28,13 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     let scene = a.scene.load()?;
     let defaults = Settings::default();
     let choice = a.camera.clone().unwrap_or_default();
-    let view = camera::first_view(&scene, &choice, defaults.width, defaults.height)?;
+    let views = camera::shot_views(&scene, &choice, defaults.width, defaults.height)?;
     let plan = FramePlan::for_scene(
         &scene,
         defaults.reflections.roughness_cutoff,
         defaults.light_grid,
         defaults.mesh_lights,
-        Some(&view),
+        &views,
     );
     let start = camera::start_position(&scene, &choice)?;
     let lighting = default_light::choose(&a.environment.environment(), &scene, start);

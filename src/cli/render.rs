@@ -79,7 +79,7 @@ pub struct RenderArgs {
     #[arg(long)]
     no_mesh_lights: bool,
     /// Give the shadows chain's four channels to the lights that emit the most over the whole
-    /// scene instead of those that bring the most direct light to the first view.
+    /// scene instead of those that bring the most direct light to the camera's views.
     #[arg(long)]
     chain_by_power: bool,
     /// Exposure multiplier before tonemapping.

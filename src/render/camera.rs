@@ -125,6 +125,28 @@ pub fn first_view(scene: &Scene, choice: &CameraChoice, width: u32, height: u32)
     Ok(view_at(scene, resolve(scene, choice)?, &scene.evaluate(0.0), aspect))
 }
 
+/// How many times over its animation a moving camera's views are taken at, time 0 the first
+/// (`shot_views`).
+const SHOT_VIEWS: u32 = 8;
+
+/// The chosen camera's views that the frame plan ranks the shadows chain's lights by: its
+/// view at time 0 or, where the camera moves with the scene's animation, its views at
+/// SHOT_VIEWS times evenly over the animation, so that a camera that walks into another room
+/// ranks that room's lights too, by how long and how brightly it sees them. (The scene itself
+/// is taken at time 0 in all of them, its surfaces and lights: render::light_view.)
+pub fn shot_views(scene: &Scene, choice: &CameraChoice, width: u32, height: u32) -> Result<Vec<View>> {
+    let aspect = width.max(1) as f32 / height.max(1) as f32;
+    let camera = resolve(scene, choice)?;
+    // Each animation loops over its own duration: the longest covers every camera path once.
+    let duration = scene.animations.iter().map(|a| a.duration()).fold(0.0, f32::max);
+    let views: Vec<View> = (0..SHOT_VIEWS)
+        .map(|k| view_at(scene, camera, &scene.evaluate(duration * k as f32 / SHOT_VIEWS as f32), aspect))
+        .collect();
+    // The framing camera follows the scene's bounds, which an animation moves: it stays one view.
+    let moves = camera.is_some() && views.iter().any(|v| v.view != views[0].view);
+    Ok(if moves { views } else { vec![first_view(scene, choice, width, height)?] })
+}
+
 /// A camera on the +Z side of the scene's bounds, seeing all of it.
 fn framing_view(scene: &Scene, pose: &Pose, aspect: f32) -> View {
     let (lo, hi) = scene.bounds(pose);

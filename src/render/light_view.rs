@@ -39,15 +39,15 @@ pub struct LightView<'a> {
 }
 
 impl<'a> LightView<'a> {
-    /// The view's surfaces at time 0, from `GRID` rays through `view`.
-    pub fn new(scene: &'a Scene, view: &View) -> Self {
+    /// The surfaces of the scene at time 0 that `GRID` rays through each of `views` reach.
+    pub fn new(scene: &'a Scene, views: &[View]) -> Self {
         let pose = scene.evaluate(0.0);
         let bvh = SceneBvh::build(scene, &pose);
         let (lo, hi) = scene.bounds(&pose);
         let eps = 1e-4 * (hi - lo).max_element().max(1e-3);
         let size = Vec2::new(GRID[0] as f32, GRID[1] as f32);
         let mut surfaces = Vec::new();
-        for k in 0..GRID[0] * GRID[1] {
+        for (view, k) in views.iter().flat_map(|v| (0..GRID[0] * GRID[1]).map(move |k| (v, k))) {
             let pixel = Vec2::new((k % GRID[0]) as f32 + 0.5, (k / GRID[0]) as f32 + 0.5);
             let dir = view.ray_dir(pixel, size);
             let mut origin = view.position;
@@ -171,7 +171,7 @@ mod tests {
     use crate::scene::builtin_many_lights::{facts, many_lights, many_panels};
 
     fn seen_from_the_camera(s: &Scene) -> LightView<'_> {
-        LightView::new(s, &first_view(s, &CameraChoice::Default, 64, 64).unwrap())
+        LightView::new(s, &[first_view(s, &CameraChoice::Default, 64, 64).unwrap()])
     }
 
     /// `builtin:many-lights`: the sealed room's lights bring nothing to the camera's room, and
@@ -259,7 +259,7 @@ mod tests {
             0.05,
             100.0,
         );
-        let seen = LightView::new(&s, &view);
+        let seen = LightView::new(&s, &[view]);
         assert!(seen.surfaces() > 0);
         let brings: Vec<f32> = (0..s.lights.len()).map(|i| seen.brings(ChainCandidate::Punctual(i))).collect();
         assert_eq!(brings[0], 0.0, "through the opaque wall: {brings:?}");
@@ -276,16 +276,68 @@ mod tests {
         let names = |p: &FramePlan| -> Vec<String> {
             p.light_order[..p.chain_punctual].iter().map(|&i| s.lights[i].name.clone()).collect()
         };
-        let by_power = FramePlan::for_scene(&s, 0.6, true, true, None);
+        let by_power = FramePlan::for_scene(&s, 0.6, true, true, &[]);
         assert!(!by_power.chain_by_view);
         assert_eq!(names(&by_power).iter().filter(|n| n.starts_with(facts::HIDDEN_PREFIX)).count(), 2);
         assert!(by_power.soft_shadows);
         let view = first_view(&s, &CameraChoice::Default, 64, 64).unwrap();
-        let by_view = FramePlan::for_scene(&s, 0.6, true, true, Some(&view));
+        let by_view = FramePlan::for_scene(&s, 0.6, true, true, &[view]);
         assert!(by_view.chain_by_view);
         let chain = names(&by_view);
         assert!(chain.len() == 4 && chain.iter().all(|n| n.starts_with("visible.")), "{chain:?}");
         assert!(!by_view.soft_shadows, "the camera room's lights are points: {:?}", by_view.reasons);
         assert_eq!(by_view.resampled_lights, by_power.resampled_lights);
+    }
+
+    /// A camera that walks into the sealed room halfway through its animation ranks the lights
+    /// of both rooms by what it sees of them over the whole shot (camera::shot_views): the
+    /// sealed room's take channels that the first view alone gives to the camera's room.
+    #[test]
+    fn an_animated_camera_ranks_the_lights_of_the_rooms_it_walks_into() {
+        use crate::render::camera::shot_views;
+        use crate::scene::animation::{Channel, Interpolation, Property};
+        let mut s = many_lights();
+        let camera = s.cameras[0].node;
+        let look = |eye: Vec3, at: Vec3| {
+            glam::Vec4::from(glam::Quat::from_mat4(&glam::Mat4::look_at_rh(eye, at, Vec3::Y).inverse()).to_array())
+        };
+        let (camera_room, sealed_room) = (Vec3::new(-3.9, 2.2, 0.0), Vec3::new(3.9, 2.2, 0.0));
+        let step = |property, values: [glam::Vec4; 2]| Channel {
+            node: camera,
+            property,
+            interpolation: Interpolation::Step,
+            times: vec![0.0, 1.0, 2.0],
+            values: vec![values[0], values[1], values[1]],
+        };
+        s.animations.push(crate::scene::Animation {
+            name: "walk".into(),
+            channels: vec![
+                step(Property::Translation, [camera_room.extend(0.0), sealed_room.extend(0.0)]),
+                step(
+                    Property::Rotation,
+                    [look(camera_room, Vec3::new(0.0, 0.6, 0.0)), look(sealed_room, Vec3::new(0.5, 0.6, 0.0))],
+                ),
+            ],
+        });
+        let names = |p: &FramePlan| -> Vec<String> {
+            p.light_order[..p.chain_punctual].iter().map(|&i| s.lights[i].name.clone()).collect()
+        };
+        let first =
+            FramePlan::for_scene(&s, 0.6, true, true, &[first_view(&s, &CameraChoice::Default, 64, 64).unwrap()]);
+        assert!(names(&first).iter().all(|n| n.starts_with("visible.")), "{:?}", names(&first));
+        let views = shot_views(&s, &CameraChoice::Default, 64, 64).unwrap();
+        assert_eq!(views.len(), 8);
+        let shot = FramePlan::for_scene(&s, 0.6, true, true, &views);
+        let chain = names(&shot);
+        eprintln!("the shot's chain: {chain:?}; the first view's: {:?}", names(&first));
+        assert!(chain.iter().any(|n| n.starts_with(facts::HIDDEN_PREFIX)), "{chain:?}");
+        assert!(
+            shot.reasons.iter().any(|r| r.contains("the camera's 8 views over its animation")),
+            "{:?}",
+            shot.reasons
+        );
+        // A camera that does not move is one view, however the rest of the scene moves.
+        s.animations[0].channels.iter_mut().for_each(|c| c.node = s.nodes.len() as u32 - 1);
+        assert_eq!(shot_views(&s, &CameraChoice::Default, 64, 64).unwrap().len(), 1);
     }
 }

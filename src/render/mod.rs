@@ -71,7 +71,7 @@ pub struct Settings {
     /// is resampled in gi, as before 2026-12-06.
     pub mesh_lights: bool,
     /// Where more lights compete for the shadows chain's channels than it has, rank them by
-    /// the direct light they bring to the first view (render::light_view). Off
+    /// the direct light they bring to the camera's views (camera::shot_views). Off
     /// (`--chain-by-power`): by the power they emit over the whole scene, as before 2026-12-06.
     pub chain_by_view: bool,
 }
@@ -189,9 +189,9 @@ pub struct ViewOverride {
 }
 
 /// The frame plan of `scene` (its lights as loaded) under `settings`; the shadows chain ranked
-/// by what its lights bring to `view` where `settings.chain_by_view` asks for it.
-fn frame_plan(scene: &Scene, settings: &Settings, view: &View) -> plan::FramePlan {
-    let ranked_by = settings.chain_by_view.then_some(view);
+/// by what its lights bring to `views` where `settings.chain_by_view` asks for it.
+fn frame_plan(scene: &Scene, settings: &Settings, views: &[View]) -> plan::FramePlan {
+    let ranked_by = if settings.chain_by_view { views } else { &[] };
     if settings.full {
         plan::FramePlan::full(scene, settings.mesh_lights, ranked_by)
     } else {
@@ -242,9 +242,9 @@ impl Renderer {
                 scene.name
             );
         }
-        // The shadows chain's lights are ranked by what they bring to the first view.
-        let first_view = camera::first_view(&scene, camera, settings.width, settings.height)?;
-        let plan = frame_plan(&scene, &settings, &first_view);
+        // The shadows chain's lights are ranked by what they bring to the camera's views.
+        let views = camera::shot_views(&scene, camera, settings.width, settings.height)?;
+        let plan = frame_plan(&scene, &settings, &views);
         let loaded_lights = scene.lights.clone();
         // The culled lights out, the rest in shading order (the shadowed ones first).
         scene.lights = plan.light_order.iter().map(|&i| loaded_lights[i].clone()).collect();
@@ -340,7 +340,7 @@ impl Renderer {
     }
 
     /// Ranks the shadows chain's lights again by what they bring to `view` (the plan ranked them
-    /// by the first view; the viewer asks again where its camera comes to rest, and after a
+    /// by the camera's views at the start; the viewer asks again where its camera comes to rest, and after a
     /// switch of cameras). Where that gives the chain other lights, the scene's lights and their
     /// tables are uploaded again in the new order and the frame is rebuilt (with or without the
     /// soft-shadow passes, as the new lights need): every temporal history starts anew.
@@ -352,7 +352,7 @@ impl Renderer {
         }
         let start = std::time::Instant::now();
         let shown = std::mem::replace(&mut self.scene.lights, self.loaded_lights.clone());
-        let plan = frame_plan(&self.scene, &self.settings, view);
+        let plan = frame_plan(&self.scene, &self.settings, std::slice::from_ref(view));
         if plan.same_chain(&self.plan) {
             self.scene.lights = shown;
             return Ok(false);

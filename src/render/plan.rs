@@ -9,7 +9,7 @@
 //!   animated scene a light or an object could move into range).
 //! - Up to four punctual lights each get their own ray-traced visibility (exact and noise-free,
 //!   with adaptive soft shadows); with more, the four that bring the most direct light to the
-//!   first view keep it (render::light_view; small emissive meshes compete for it too) and the
+//!   camera's views keep it (render::light_view; small emissive meshes compete for it too) and the
 //!   rest are resampled in gi: one light per pixel from candidates drawn from the light grid
 //!   (each cell lists the lights whose range reaches it) and the pixel's reservoir of last
 //!   frame, with shadow rays, so the cost per pixel does not grow with their number (see
@@ -55,7 +55,7 @@ pub struct FramePlan {
     /// (world::lights::chain_lights): (instance, first emitter, triangles).
     pub chain_emitters: Vec<(u32, u32, u32)>,
     /// More lights competed for the chain than it has channels, and they were ranked by what
-    /// they bring to the first view (render::light_view) rather than by power.
+    /// they bring to the camera's views (render::light_view) rather than by power.
     pub chain_by_view: bool,
     /// The diagonal of the scene's bounding box (at time 0): the radiance cache sizes its
     /// cells by it.
@@ -93,10 +93,10 @@ impl FramePlan {
         if names.is_empty() { "no light".into() } else { names.join(", ") }
     }
 
-    /// Everything on (`--full`); `mesh_lights` and `view` as in [`FramePlan::for_scene`].
-    pub fn full(scene: &Scene, mesh_lights: bool, view: Option<&View>) -> Self {
+    /// Everything on (`--full`); `mesh_lights` and `views` as in [`FramePlan::for_scene`].
+    pub fn full(scene: &Scene, mesh_lights: bool, views: &[View]) -> Self {
         let kept: Vec<usize> = (0..scene.lights.len()).collect();
-        let (chain, chain_emitters, chain_by_view) = chain_lights(scene, &kept, mesh_lights, view);
+        let (chain, chain_emitters, chain_by_view) = chain_lights(scene, &kept, mesh_lights, views);
         let chain_punctual = chain.len();
         let light_order = crate::world::lights::shading_order(scene, &[], &chain);
         Self {
@@ -119,15 +119,16 @@ impl FramePlan {
     /// `light_grid`: the resampled lights' candidates are drawn from the light grid
     /// (`Settings::light_grid`), which only the reason's text depends on.
     /// `mesh_lights`: small emissive meshes may take the shadows chain's free channels
-    /// (`Settings::mesh_lights`). `view`: the camera at time 0; where more lights compete for
-    /// the shadows chain than it has channels, they rank by what they bring to it
-    /// (render::light_view), and by power without it.
+    /// (`Settings::mesh_lights`). `views`: the camera's (camera::shot_views: at time 0, and
+    /// over its animation where it moves); where more lights compete for the shadows chain
+    /// than it has channels, they rank by what they bring to them (render::light_view), and by
+    /// power without any.
     pub fn for_scene(
         scene: &Scene,
         roughness_cutoff: f32,
         light_grid: bool,
         mesh_lights: bool,
-        view: Option<&View>,
+        views: &[View],
     ) -> Self {
         let mut reasons = Vec::new();
 
@@ -156,9 +157,14 @@ impl FramePlan {
 
         let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
         let kept: Vec<usize> = (0..scene.lights.len()).filter(|i| !culled_lights.contains(i)).collect();
-        let (chain, chain_emitters, chain_by_view) = chain_lights(scene, &kept, mesh_lights, view);
+        let (chain, chain_emitters, chain_by_view) = chain_lights(scene, &kept, mesh_lights, views);
         let chain_punctual = chain.len();
         let light_order = crate::world::lights::shading_order(scene, &culled_lights, &chain);
+        let seen = if views.len() > 1 {
+            format!("the camera's {} views over its animation", views.len())
+        } else {
+            "the first view".into()
+        };
         let shadowed = &light_order[..chain_punctual];
         let mut soft: Vec<&str> =
             shadowed.iter().map(|&i| &scene.lights[i]).filter(|l| l.radius > 0.0).map(|l| l.name.as_str()).collect();
@@ -204,7 +210,11 @@ impl FramePlan {
                 format!(
                     "the {} {} ({}) keep a visibility of their own (exact, noise-free)",
                     shadowed.len(),
-                    if chain_by_view { "that bring the most direct light to the first view" } else { "brightest" },
+                    if chain_by_view {
+                        format!("that bring the most direct light to {seen}")
+                    } else {
+                        "brightest".into()
+                    },
                     list(&names)
                 )
             };
@@ -240,7 +250,7 @@ impl FramePlan {
                  gi's reservoirs leave them out): {}",
                 mesh_lights.len(),
                 crate::world::lights::MAX_CHAIN_EMITTER_TRIANGLES,
-                if chain_by_view { "bring to the first view" } else { "emit" },
+                if chain_by_view { format!("bring to {seen}") } else { "emit".into() },
                 list(&mesh_lights)
             ));
         }
@@ -314,20 +324,17 @@ fn scene_diagonal(scene: &Scene) -> f32 {
     if d.is_finite() { d } else { 1.0 }
 }
 
-/// world::lights::chain_lights, its candidates ranked by what they bring to `view` where one is
-/// given and more compete than the chain has channels (the CPU BVH is built only then).
-/// Also says whether the view ranked them (some of its rays reached a surface).
+/// world::lights::chain_lights, its candidates ranked by what they bring to `views` where any
+/// are given and more compete than the chain has channels (the CPU BVH is built only then).
+/// Also says whether the views ranked them (some of their rays reached a surface).
 fn chain_lights(
     scene: &Scene,
     kept: &[usize],
     mesh_lights: bool,
-    view: Option<&View>,
+    views: &[View],
 ) -> (Vec<usize>, Vec<(u32, u32, u32)>, bool) {
     let seen = std::cell::OnceCell::new();
-    let brings = |c| match view {
-        Some(v) => seen.get_or_init(|| LightView::new(scene, v)).brings(c),
-        None => 0.0,
-    };
+    let brings = |c| if views.is_empty() { 0.0 } else { seen.get_or_init(|| LightView::new(scene, views)).brings(c) };
     let (lights, meshes) = crate::world::lights::chain_lights(scene, kept, mesh_lights, &brings);
     let by_view = seen.get().is_some_and(|v| v.surfaces() > 0);
     (lights, meshes, by_view)
@@ -425,9 +432,9 @@ mod tests {
 
     #[test]
     fn punctual_only_scenes_get_hard_shadows_and_matte_ones_no_reflection_rays() {
-        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true, None);
+        let p = FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true, &[]);
         assert!(!p.soft_shadows && !p.reflections && p.gi, "{:?}", p.reasons);
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true, None);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true, &[]);
         assert!(p.soft_shadows);
     }
 
@@ -436,7 +443,7 @@ mod tests {
         let tinted_with = |m: crate::scene::Material| {
             let mut s = builtin::shadow_test();
             s.materials[0] = m;
-            FramePlan::for_scene(&s, 0.6, true, true, None).tinted_shadows
+            FramePlan::for_scene(&s, 0.6, true, true, &[]).tinted_shadows
         };
         let glass = |rgb: Vec3| crate::scene::Material {
             name: "glass".into(),
@@ -456,12 +463,12 @@ mod tests {
             ..Default::default()
         };
         assert!(!tinted_with(blend), "blended surfaces let 1 - alpha through, grey");
-        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true, None).tinted_shadows);
+        assert!(!FramePlan::for_scene(&builtin::shadow_test(), 0.6, true, true, &[]).tinted_shadows);
         let mut unlit = builtin::shadow_test();
         unlit.materials[0] = glass(Vec3::new(1.0, 0.5, 0.25));
         unlit.lights.clear();
         assert!(
-            !FramePlan::for_scene(&unlit, 0.6, true, true, None).tinted_shadows,
+            !FramePlan::for_scene(&unlit, 0.6, true, true, &[]).tinted_shadows,
             "no punctual light: nothing to shadow"
         );
     }
@@ -482,18 +489,18 @@ mod tests {
         });
         far.node = node;
         s.lights.push(far);
-        let p = FramePlan::for_scene(&s, 0.6, true, true, None);
+        let p = FramePlan::for_scene(&s, 0.6, true, true, &[]);
         assert_eq!(p.culled_lights, vec![1], "{:?}", p.reasons);
         // The same light in reach stays.
         s.nodes[node as usize].translation = Vec3::new(0.0, 1.5, 0.0);
-        assert!(FramePlan::for_scene(&s, 0.6, true, true, None).culled_lights.is_empty());
-        assert_eq!(FramePlan::for_scene(&s, 0.6, true, true, None).light_order, vec![0, 1]);
+        assert!(FramePlan::for_scene(&s, 0.6, true, true, &[]).culled_lights.is_empty());
+        assert_eq!(FramePlan::for_scene(&s, 0.6, true, true, &[]).light_order, vec![0, 1]);
     }
 
     #[test]
     fn lights_past_the_shadowed_four_are_resampled_and_the_plan_names_the_four() {
         let s = crate::scene::builtin_many_lights::many_lights();
-        let p = FramePlan::for_scene(&s, 0.6, true, true, None);
+        let p = FramePlan::for_scene(&s, 0.6, true, true, &[]);
         // (The camera room's highest lights reach no surface with their short range: culled.)
         assert_eq!(p.light_order.len(), s.lights.len() - p.culled_lights.len());
         assert_eq!(p.chain_punctual, MAX_SHADOWED_LIGHTS);
@@ -505,11 +512,11 @@ mod tests {
         }
         assert!(line.contains("light_grid_update"), "{line}");
         // Without the light grid the line says where the candidates come from instead.
-        let p = FramePlan::for_scene(&s, 0.6, false, true, None);
+        let p = FramePlan::for_scene(&s, 0.6, false, true, &[]);
         let line = p.reasons.iter().find(|r| r.starts_with("many lights")).expect("no many-lights line");
         assert!(line.contains("--no-light-grid") && !line.contains("light_grid_update"), "{line}");
         // Four lights or fewer: none resampled, the scene's order kept.
-        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true, None);
+        let p = FramePlan::for_scene(&builtin::soft_shadow_test(), 0.6, true, true, &[]);
         assert_eq!((p.resampled_lights, p.light_order.clone()), (0, vec![0]));
     }
 }
