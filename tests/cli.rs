@@ -1,6 +1,7 @@
 //! The command line end to end: pass capture (files, manifest, exact values), frame lists,
 //! refusal to overwrite a capture, `info`, the compute fall-back when ray tracing is hidden,
-//! and runtime shader compilation errors that point at file and line.
+//! runtime shader compilation errors that point at file and line, and output read through a
+//! pipe that closes early.
 
 mod common;
 
@@ -239,4 +240,23 @@ fn without_the_shader_compiler_shader_dir_says_how_to_rebuild() {
     let msg = text(&r);
     assert!(!r.status.success() && msg.contains("--features shader-compiler"), "{msg}");
     assert!(!msg.contains("panicked") && !out.exists(), "{msg}");
+}
+
+/// Output read only in part (`hybrid-rt plan | head`): the command stops quietly, with success
+/// and no panic, where `println!` panicked on the closed pipe ("failed printing to stdout:
+/// Broken pipe") with a backtrace.
+#[test]
+fn a_reader_that_stops_early_ends_the_command_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"))
+        .args(["plan", "builtin:many-lights"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes away before the plan (which takes a tenth of a second) is printed.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "status {:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked") && stderr.is_empty(), "{stderr}");
 }

@@ -113,7 +113,7 @@ fn run_rays(a: &RaysArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    println!("device: {} ({})", ctx.caps.device_name, ctx.caps.driver);
+    outln!("device: {} ({})", ctx.caps.device_name, ctx.caps.driver);
     print!("{}", rays::table(&results));
     let json = serde_json::json!({
         "device": ctx.caps.device_name,
@@ -122,7 +122,7 @@ fn run_rays(a: &RaysArgs) -> Result<()> {
         "scenes": results,
     });
     image_io::write_atomic(&out, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
-    println!("wrote {}", out.display());
+    outln!("wrote {}", out.display());
     finish_validation(ctx)
 }
 
@@ -280,7 +280,7 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
             let (png, svg) = chart.next().expect("one chart per scene and size");
             crate::bench::chart::write(&s, png, svg)?;
             print!("{}", sweep::table(&s));
-            println!("chart: {} and {}", png.display(), svg.display());
+            outln!("chart: {} and {}", png.display(), svg.display());
             sweeps.push(s);
         }
     }
@@ -292,7 +292,7 @@ fn run_sweep(a: &SweepArgs) -> Result<()> {
         "sweeps": sweeps,
     });
     image_io::write_atomic(&json_path, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
-    println!("wrote {}", json_path.display());
+    outln!("wrote {}", json_path.display());
     finish_validation(ctx)
 }
 

@@ -69,7 +69,7 @@ pub fn run(a: &FrameArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    println!(
+    outln!(
         "device: {} ({}), {} backend, scene {}, {}",
         ctx.caps.device_name,
         ctx.caps.driver,
@@ -87,6 +87,6 @@ pub fn run(a: &FrameArgs) -> Result<()> {
         "sizes": costs,
     });
     image_io::write_atomic(&out, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
-    println!("wrote {}", out.display());
+    outln!("wrote {}", out.display());
     finish_validation(ctx)
 }

@@ -21,18 +21,18 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     let (picked, why) = backend::resolve(caps, a.gpu.backend)?;
     if a.json {
         let v = serde_json::json!({ "device": caps, "backend": picked, "reason": why });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let yes = |b: bool| if b { "yes" } else { "no" };
-        println!("device:                   {} ({})", caps.device_name, caps.device_type);
-        println!("driver:                   {}", caps.driver);
-        println!("Vulkan:                   {}", caps.api_version);
-        println!("acceleration structures:  {}", yes(caps.acceleration_structure));
-        println!("ray query:                {}", yes(caps.ray_query));
-        println!("buffer device address:    {}", yes(caps.buffer_device_address));
-        println!("deferred host operations: {}", yes(caps.deferred_host_operations));
-        println!("timestamps:               {}", if caps.timestamp_period_ns > 0.0 { "yes" } else { "no" });
-        println!("ray backend:              {} ({why})", picked.variant());
+        outln!("device:                   {} ({})", caps.device_name, caps.device_type);
+        outln!("driver:                   {}", caps.driver);
+        outln!("Vulkan:                   {}", caps.api_version);
+        outln!("acceleration structures:  {}", yes(caps.acceleration_structure));
+        outln!("ray query:                {}", yes(caps.ray_query));
+        outln!("buffer device address:    {}", yes(caps.buffer_device_address));
+        outln!("deferred host operations: {}", yes(caps.deferred_host_operations));
+        outln!("timestamps:               {}", if caps.timestamp_period_ns > 0.0 { "yes" } else { "no" });
+        outln!("ray backend:              {} ({why})", picked.variant());
     }
     finish_validation(ctx)
 }

@@ -1,6 +1,16 @@
 //! The command line: `hybrid-rt render | info | ...`. Each subcommand lives in its own file;
 //! this one holds the shared arguments and turns errors into a message and a non-zero exit.
 
+/// `println!` for what the command line prints: a pipe closed early (`hybrid-rt plan | head`)
+/// becomes an error that `run` ends quietly, where `println!` panics. Returns from the calling
+/// function, which must return `anyhow::Result`.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout(), $($arg)*)?
+    }};
+}
+
 mod bench;
 mod bench_frame;
 mod info;
@@ -236,6 +246,10 @@ fn run(cli: Cli) -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // Whoever read the output stopped (`| head`): nothing went wrong here.
+        Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) => {
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             if e.chain().any(|c| c.is::<crate::gpu::OutOfDeviceMemory>()) {

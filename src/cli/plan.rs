@@ -45,10 +45,10 @@ pub fn run(a: &PlanArgs) -> Result<()> {
             plan: &'a FramePlan,
             lighting: &'a default_light::Lighting,
         }
-        println!("{}", serde_json::to_string_pretty(&Out { plan: &plan, lighting: &lighting })?);
+        outln!("{}", serde_json::to_string_pretty(&Out { plan: &plan, lighting: &lighting })?);
         return Ok(());
     }
-    println!(
+    outln!(
         "frame plan for {} ({} triangles, {} instances, {} lights):",
         scene.name,
         scene.triangle_count(),
@@ -56,24 +56,24 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         scene.lights.len()
     );
     let on = |b: bool| if b { "runs" } else { "skipped" };
-    println!("  gbuffer                  runs");
-    println!(
+    outln!("  gbuffer                  runs");
+    outln!(
         "  shadows                  runs ({})",
         if plan.soft_shadows { "adaptive soft shadows" } else { "one hard ray per light" }
     );
-    println!("  shadows_penumbra/tent/filter {}", on(plan.soft_shadows));
+    outln!("  shadows_penumbra/tent/filter {}", on(plan.soft_shadows));
     let cache = Settings::default().radiance_cache;
     let cache_used = plan.gi || plan.reflections;
-    println!("  radiance_cache           {}", on(cache_used));
-    println!("  gi                       {}", on(plan.gi));
-    println!("  reflections              {}", on(plan.reflections));
-    println!("  svgf chains, composite, taa, tonemap, history  run");
-    println!("why:");
+    outln!("  radiance_cache           {}", on(cache_used));
+    outln!("  gi                       {}", on(plan.gi));
+    outln!("  reflections              {}", on(plan.reflections));
+    outln!("  svgf chains, composite, taa, tonemap, history  run");
+    outln!("why:");
     for r in &plan.reasons {
-        println!("  - {r}");
+        outln!("  - {r}");
     }
-    println!("  - lighting: {}", lighting.note);
-    println!("  - {}", crate::passes::radiance_cache::describe(&cache, cache_used, plan.scene_diagonal));
-    println!("(`hybrid-rt render --full` runs every pass)");
+    outln!("  - lighting: {}", lighting.note);
+    outln!("  - {}", crate::passes::radiance_cache::describe(&cache, cache_used, plan.scene_diagonal));
+    outln!("(`hybrid-rt render --full` runs every pass)");
     Ok(())
 }

@@ -118,7 +118,7 @@ pub fn run(a: &ReferenceArgs) -> Result<()> {
         let rgba: Vec<u8> = img.as_f32().unwrap_or(&[]).iter().map(|v| (v * 255.0).round() as u8).collect();
         image_io::write_png_rgba8(p, width, height, &rgba)?;
     }
-    println!(
+    outln!(
         "wrote {} ({width}x{height}, {} spp, seed {}, {} backend, {seconds:.1} s, {:.2} Mrays/s on {})",
         a.out.display(),
         a.spp,

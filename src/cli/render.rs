@@ -167,7 +167,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             target,
         )?;
         config.apply(&mut settings);
-        println!("configuration {why}");
+        outln!("configuration {why}");
     }
     let mut renderer = Renderer::new(&ctx, &shaders, scene, settings, &camera, picked)?;
 
@@ -199,7 +199,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     // Wall clock: timestamps can miss compute passes (lavapipe), see `bench frame`.
     let frame_ms = renderer.last_frame_wall_ms;
-    println!(
+    outln!(
         "wrote {} ({width}x{height}, {} frame(s), {} backend, last frame {frame_ms:.2} ms on {})",
         a.out.display(),
         a.frames,
@@ -207,7 +207,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         ctx.caps.device_name
     );
     if let Some(c) = &capture {
-        println!("pass dumps in {} (manifest.json)", c.dir.display());
+        outln!("pass dumps in {} (manifest.json)", c.dir.display());
     }
     drop(renderer);
     finish_validation(ctx)

@@ -58,7 +58,7 @@ pub fn run(a: &SoakArgs) -> Result<()> {
     let result = soak::run(&mut renderer, &opts, &|n| bar.set_position(n as u64))?;
     bar.finish_and_clear();
     drop(renderer);
-    println!(
+    outln!(
         "device: {} ({}), {} backend, {width}x{height}, {}",
         ctx.caps.device_name,
         ctx.caps.driver,
@@ -77,6 +77,6 @@ pub fn run(a: &SoakArgs) -> Result<()> {
         "result": result,
     });
     image_io::write_atomic(&out, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
-    println!("wrote {}", out.display());
+    outln!("wrote {}", out.display());
     finish_validation(ctx)
 }

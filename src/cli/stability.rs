@@ -56,10 +56,10 @@ pub fn run(a: &StabilityArgs) -> Result<()> {
         bar.inc(1);
     })?;
     bar.finish_and_clear();
-    println!("device: {} ({}), {width}x{height}, backend {}", ctx.caps.device_name, ctx.caps.driver, picked.variant());
+    outln!("device: {} ({}), {width}x{height}, backend {}", ctx.caps.device_name, ctx.caps.driver, picked.variant());
     if (width, height) != stability::BOUND_SIZE {
         let (bw, bh) = stability::BOUND_SIZE;
-        println!("note: the bounds were measured at {bw}x{bh}; at this size they are only a guide");
+        outln!("note: the bounds were measured at {bw}x{bh}; at this size they are only a guide");
     }
     print!("{}", stability::table(&rows));
     let json = serde_json::json!({
@@ -72,6 +72,6 @@ pub fn run(a: &StabilityArgs) -> Result<()> {
         "rows": rows,
     });
     image_io::write_atomic(&out, |tmp| Ok(std::fs::write(tmp, serde_json::to_vec_pretty(&json)?)?))?;
-    println!("wrote {}", out.display());
+    outln!("wrote {}", out.display());
     finish_validation(ctx)
 }
