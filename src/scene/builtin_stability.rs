@@ -26,6 +26,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 /// Names accepted after `builtin:` for the scenes of this file.
 pub const NAMES: &[&str] = &[
     "stability-slide",
+    "stability-slide-morph",
     "stability-lights",
     "stability-lights-resampled",
     "stability-lights-occluded",
@@ -44,6 +45,7 @@ pub const NAMES: &[&str] = &[
 pub fn by_name(name: &str) -> Option<Scene> {
     match name {
         "stability-slide" => Some(slide()),
+        "stability-slide-morph" => Some(slide_morph()),
         "stability-lights" => Some(lights()),
         "stability-lights-resampled" => Some(lights_resampled()),
         "stability-lights-occluded" => Some(lights_occluded(false)),
@@ -199,6 +201,31 @@ pub fn slide() -> Scene {
                 values: vec![yaw(PAN_YAW), yaw(-PAN_YAW), yaw(-PAN_YAW)],
             },
         ],
+    });
+    s
+}
+
+/// `slide` with the cube moved by a morph target instead of its node: the node stays at the
+/// start and the target shifts every vertex by the whole travel, its weight going from 0 to 1
+/// over the same time. The pixels see the same cube in the same places; only how it moves
+/// differs (its vertices within the mesh, which the G-buffer's motion vectors must carry).
+pub fn slide_morph() -> Scene {
+    use slide_facts::*;
+    let mut s = slide();
+    s.name = "builtin:stability-slide-morph".into();
+    let (node, mesh) = (s.instances[CUBE_INSTANCE as usize].node, s.instances[CUBE_INSTANCE as usize].mesh);
+    s.animations[0].channels.retain(|c| c.node != node);
+    let count = s.meshes[mesh as usize].vertices.len();
+    s.morphs.push(super::Morph {
+        mesh,
+        targets: vec![super::MorphTarget { positions: vec![Vec3::X * 2.0 * CUBE_TRAVEL; count], normals: Vec::new() }],
+        weights: vec![0.0],
+        channels: vec![super::WeightChannel {
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, SLIDE_END, HOLD],
+            values: vec![0.0, 1.0, 1.0],
+            period: HOLD,
+        }],
     });
     s
 }
