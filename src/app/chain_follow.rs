@@ -1,9 +1,10 @@
 //! The shadows chain follows the viewer's camera. The plan gives the chain's four channels to
-//! the lights that bring the most to the first view (render::light_view); a camera that flies
-//! into another room would keep those four and leave that room's lights to gi's resampling.
-//! So where the camera comes to rest, and after a switch of scene cameras, the chain is ranked
-//! again at the view (`Renderer::rank_chain_for`). Not while it moves: a new chain rebuilds the
-//! frame and restarts its histories, which every step of a walk would do.
+//! the lights that bring the most to the camera's views at the start (render::light_view); a
+//! camera that flies into another room would keep those four and leave that room's lights to
+//! gi's resampling. So where the camera comes to rest, and after a switch of scene cameras,
+//! the chain is ranked again at the view (`Renderer::rank_chain_for`). Not while it moves: a
+//! new chain rebuilds the frame and restarts its histories, which every step of a walk would
+//! do.
 
 use super::Viewer;
 use crate::render::ViewOverride;

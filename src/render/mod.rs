@@ -205,6 +205,50 @@ fn frame_plan(scene: &Scene, settings: &Settings, views: &[View]) -> plan::Frame
     }
 }
 
+/// What a scene is put on the GPU with, and its frame built: at start-up and when the shadows
+/// chain is ranked again (`Renderer::rank_chain_for`).
+struct Upload<'a> {
+    ctx: &'a Arc<Context>,
+    pool: &'a CommandPool,
+    shaders: &'a ShaderLibrary,
+    backend: Backend,
+    environment: &'a crate::world::environment::EnvironmentData,
+    settings: &'a Settings,
+}
+
+impl Upload<'_> {
+    /// `scene` (its lights in `plan`'s shading order) on the GPU at `pose`, and the frame's
+    /// passes for `plan`, with what they hand back besides.
+    fn scene_and_frame(
+        &self,
+        scene: &Scene,
+        pose: &Pose,
+        plan: &plan::FramePlan,
+    ) -> Result<(SceneGpu, Graph, frame::HybridFrame)> {
+        let s = self.settings;
+        let scene_gpu = SceneGpu::upload(
+            self.ctx,
+            self.pool,
+            self.shaders,
+            scene,
+            pose,
+            self.backend,
+            self.environment,
+            s.brdf,
+            s.light_grid,
+            crate::world::lights::ChainLights {
+                punctual: plan.chain_punctual,
+                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
+            },
+        )?;
+        let b = PassBuilder { ctx: self.ctx, shaders: self.shaders, scene: &scene_gpu };
+        let mut parts = frame_parts(&b, s, plan)?;
+        let extent = vk::Extent2D { width: s.width, height: s.height };
+        let graph = Graph::new(self.ctx, std::mem::take(&mut parts.passes), extent)?;
+        Ok((scene_gpu, graph, parts))
+    }
+}
+
 /// The passes of a frame for `settings`, the images the CPU feeds into it and its HDR output.
 fn frame_parts(b: &PassBuilder, settings: &Settings, plan: &plan::FramePlan) -> Result<frame::HybridFrame> {
     Ok(match settings.mode {
@@ -261,25 +305,8 @@ impl Renderer {
         let pose = scene.evaluate(settings.start_time);
         let (lo, hi) = scene.bounds(&pose);
         let scene_centre = if lo.is_finite() && hi.is_finite() { (lo + hi) * 0.5 } else { glam::Vec3::ZERO };
-        let scene_gpu = SceneGpu::upload(
-            ctx,
-            &pool,
-            shaders,
-            &scene,
-            &pose,
-            backend,
-            &environment,
-            settings.brdf,
-            settings.light_grid,
-            crate::world::lights::ChainLights {
-                punctual: plan.chain_punctual,
-                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
-            },
-        )?;
-        let b = PassBuilder { ctx, shaders, scene: &scene_gpu };
-        let parts = frame_parts(&b, &settings, &plan)?;
-        let extent = vk::Extent2D { width: settings.width, height: settings.height };
-        let graph = Graph::new(ctx, parts.passes, extent)?;
+        let gpu = Upload { ctx, pool: &pool, shaders, backend, environment: &environment, settings: &settings };
+        let (scene_gpu, graph, parts) = gpu.scene_and_frame(&scene, &pose, &plan)?;
         let (injected, hdr_output, radiance_cache) = (parts.injected, parts.hdr_output, parts.radiance_cache);
         Ok(Self {
             plan,
@@ -340,8 +367,8 @@ impl Renderer {
     }
 
     /// Ranks the shadows chain's lights again by what they bring to `view` (the plan ranked them
-    /// by the camera's views at the start; the viewer asks again where its camera comes to rest, and after a
-    /// switch of cameras). Where that gives the chain other lights, the scene's lights and their
+    /// by the camera's views at the start; the viewer asks again where its camera comes to
+    /// rest, and after a switch of cameras). Where that gives the chain other lights, the scene's lights and their
     /// tables are uploaded again in the new order and the frame is rebuilt (with or without the
     /// soft-shadow passes, as the new lights need): every temporal history starts anew.
     /// Returns whether the chain changed; nothing changes where the settings rank by power, or
@@ -358,7 +385,15 @@ impl Renderer {
             return Ok(false);
         }
         self.scene.lights = plan.light_order.iter().map(|&i| self.loaded_lights[i].clone()).collect();
-        let rebuilt = self.upload_with(shaders, &plan);
+        let gpu = Upload {
+            ctx: &self.ctx,
+            pool: &self.pool,
+            shaders,
+            backend: self.backend,
+            environment: &self.environment,
+            settings: &self.settings,
+        };
+        let rebuilt = gpu.scene_and_frame(&self.scene, &self.pose_of(self.frame_index), &plan);
         if rebuilt.is_err() {
             self.scene.lights = shown;
         }
@@ -388,35 +423,6 @@ impl Renderer {
     /// The names of the shadows chain's lights, punctual and mesh lights.
     pub fn chain_names(&self) -> String {
         self.plan.chain_names(&self.loaded_lights, &self.scene)
-    }
-
-    /// The scene on the GPU and the frame's passes for `plan`, with `self.scene`'s lights.
-    fn upload_with(
-        &self,
-        shaders: &ShaderLibrary,
-        plan: &plan::FramePlan,
-    ) -> Result<(SceneGpu, Graph, frame::HybridFrame)> {
-        let pose = self.pose_of(self.frame_index);
-        let scene_gpu = SceneGpu::upload(
-            &self.ctx,
-            &self.pool,
-            shaders,
-            &self.scene,
-            &pose,
-            self.backend,
-            &self.environment,
-            self.settings.brdf,
-            self.settings.light_grid,
-            crate::world::lights::ChainLights {
-                punctual: plan.chain_punctual,
-                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
-            },
-        )?;
-        let b = PassBuilder { ctx: &self.ctx, shaders, scene: &scene_gpu };
-        let mut parts = frame_parts(&b, &self.settings, plan)?;
-        let extent = vk::Extent2D { width: self.settings.width, height: self.settings.height };
-        let graph = Graph::new(&self.ctx, std::mem::take(&mut parts.passes), extent)?;
-        Ok((scene_gpu, graph, parts))
     }
 
     /// Replaces the scene's camera by `view` from the next frame on (`None`: the scene's
