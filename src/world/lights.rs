@@ -554,7 +554,7 @@ fn mesh_light_candidates(scene: &Scene) -> Vec<((u32, u32, u32), f32)> {
 }
 
 /// Object-space vertex positions of deformed meshes, by mesh, in place of their vertices'.
-pub type Shapes = std::collections::HashMap<u32, Vec<Vec3>>;
+type Shapes = std::collections::HashMap<u32, Vec<Vec3>>;
 
 /// Every triangle of every emissive instance in world space, in emitter order, each mesh in
 /// its undeformed shape; those of the instances in `chain` (the shadows chain's mesh lights)
