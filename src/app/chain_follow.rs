@@ -7,7 +7,7 @@
 //! do.
 
 use super::Viewer;
-use crate::render::ViewOverride;
+use crate::render::{Reranked, ViewOverride};
 use std::time::{Duration, Instant};
 
 /// How long the camera must hold still before the chain is ranked at its view.
@@ -46,11 +46,11 @@ impl Viewer {
         self.renderer.set_view_override(self.camera.view_override());
         let view = self.renderer.view_of(&self.renderer.pose_of(self.renderer.frame_index));
         match self.renderer.rank_chain_for(&self.shaders, &view) {
-            Ok(true) => {
+            Ok(Reranked::Same) => {}
+            Ok(_) => {
                 self.message = format!("shadows chain ranked at this view: {}", self.renderer.chain_names());
                 self.fall_back_view();
             }
-            Ok(false) => {}
             Err(e) => self.message = format!("shadows chain kept: {e:#}"),
         }
     }

@@ -28,6 +28,21 @@ pub struct HybridFrame {
     pub radiance_cache: Option<Arc<radiance_cache::Cache>>,
 }
 
+/// Whether `hybrid` builds the same passes, with the same parameters, for plans `a` and `b`:
+/// what it reads of a plan, below, compared. The shadows chain ranked again at another view
+/// keeps the frame where only which punctual lights hold the channels changed
+/// (`Renderer::rank_chain_for`). Keep it beside `hybrid`: a plan field `hybrid` starts to read
+/// belongs here too.
+pub fn same_passes(a: &FramePlan, b: &FramePlan) -> bool {
+    let read = |p: &FramePlan| {
+        (
+            (p.soft_shadows, p.tinted_shadows, p.gi, p.reflections, p.reservoirs(), p.emitters > 0),
+            (p.chain_punctual, p.chain_emitters.clone(), p.scene_diagonal.to_bits()),
+        )
+    };
+    read(a) == read(b)
+}
+
 pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<HybridFrame> {
     let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(passes::gbuffer::new(b)?)];
     let mut kept = history::gbuffer();

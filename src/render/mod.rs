@@ -205,6 +205,19 @@ fn frame_plan(scene: &Scene, settings: &Settings, views: &[View]) -> plan::Frame
     }
 }
 
+/// What ranking the shadows chain again changed (`Renderer::rank_chain_for`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reranked {
+    /// The chain keeps its lights.
+    Same,
+    /// Other punctual lights hold the channels, with the same passes: the scene's lights and
+    /// their tables were uploaded again, the frame's passes kept.
+    SceneUploaded,
+    /// The new lights need other passes (soft shadows on or off, mesh lights): the frame was
+    /// rebuilt too.
+    FrameRebuilt,
+}
+
 /// What a scene is put on the GPU with, and its frame built: at start-up and when the shadows
 /// chain is ranked again (`Renderer::rank_chain_for`).
 struct Upload<'a> {
@@ -217,6 +230,25 @@ struct Upload<'a> {
 }
 
 impl Upload<'_> {
+    /// `scene` (its lights in `plan`'s shading order) on the GPU at `pose`.
+    fn scene(&self, scene: &Scene, pose: &Pose, plan: &plan::FramePlan) -> Result<SceneGpu> {
+        SceneGpu::upload(
+            self.ctx,
+            self.pool,
+            self.shaders,
+            scene,
+            pose,
+            self.backend,
+            self.environment,
+            self.settings.brdf,
+            self.settings.light_grid,
+            crate::world::lights::ChainLights {
+                punctual: plan.chain_punctual,
+                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
+            },
+        )
+    }
+
     /// `scene` (its lights in `plan`'s shading order) on the GPU at `pose`, and the frame's
     /// passes for `plan`, with what they hand back besides.
     fn scene_and_frame(
@@ -226,21 +258,7 @@ impl Upload<'_> {
         plan: &plan::FramePlan,
     ) -> Result<(SceneGpu, Graph, frame::HybridFrame)> {
         let s = self.settings;
-        let scene_gpu = SceneGpu::upload(
-            self.ctx,
-            self.pool,
-            self.shaders,
-            scene,
-            pose,
-            self.backend,
-            self.environment,
-            s.brdf,
-            s.light_grid,
-            crate::world::lights::ChainLights {
-                punctual: plan.chain_punctual,
-                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
-            },
-        )?;
+        let scene_gpu = self.scene(scene, pose, plan)?;
         let b = PassBuilder { ctx: self.ctx, shaders: self.shaders, scene: &scene_gpu };
         let mut parts = frame_parts(&b, s, plan)?;
         let extent = vk::Extent2D { width: s.width, height: s.height };
@@ -368,21 +386,22 @@ impl Renderer {
 
     /// Ranks the shadows chain's lights again by what they bring to `view` (the plan ranked them
     /// by the camera's views at the start; the viewer asks again where its camera comes to
-    /// rest, and after a switch of cameras). Where that gives the chain other lights, the scene's lights and their
-    /// tables are uploaded again in the new order and the frame is rebuilt (with or without the
-    /// soft-shadow passes, as the new lights need): every temporal history starts anew.
-    /// Returns whether the chain changed; nothing changes where the settings rank by power, or
-    /// four lights or fewer compete. On error the old frame stays as it was.
-    pub fn rank_chain_for(&mut self, shaders: &ShaderLibrary, view: &View) -> Result<bool> {
+    /// rest, and after a switch of cameras). Where that gives the chain other lights, the
+    /// scene's lights and their tables are uploaded again in the new order, and the frame's
+    /// passes are rebuilt where the new lights need other ones (soft shadows on or off, mesh
+    /// lights; `frame::same_passes`). Every temporal history starts anew. Says what changed;
+    /// nothing does where the settings rank by power, or four lights or fewer compete. On
+    /// error the old frame stays as it was.
+    pub fn rank_chain_for(&mut self, shaders: &ShaderLibrary, view: &View) -> Result<Reranked> {
         if !self.settings.chain_by_view || matches!(self.settings.mode, RenderMode::Reference { .. }) {
-            return Ok(false);
+            return Ok(Reranked::Same);
         }
         let start = std::time::Instant::now();
         let shown = std::mem::replace(&mut self.scene.lights, self.loaded_lights.clone());
         let plan = frame_plan(&self.scene, &self.settings, std::slice::from_ref(view));
         if plan.same_chain(&self.plan) {
             self.scene.lights = shown;
-            return Ok(false);
+            return Ok(Reranked::Same);
         }
         self.scene.lights = plan.light_order.iter().map(|&i| self.loaded_lights[i].clone()).collect();
         let gpu = Upload {
@@ -393,31 +412,43 @@ impl Renderer {
             environment: &self.environment,
             settings: &self.settings,
         };
-        let rebuilt = gpu.scene_and_frame(&self.scene, &self.pose_of(self.frame_index), &plan);
-        if rebuilt.is_err() {
+        let pose = self.pose_of(self.frame_index);
+        // The passes hold nothing of the scene's but its descriptor set layout, which every
+        // upload makes alike (Vulkan: "identically defined", so the pipelines bind the new
+        // set): where the plan keeps the same passes, only the scene is uploaded again.
+        let kept = frame::same_passes(&self.plan, &plan);
+        let uploaded = if kept {
+            gpu.scene(&self.scene, &pose, &plan).map(|scene_gpu| (scene_gpu, None))
+        } else {
+            gpu.scene_and_frame(&self.scene, &pose, &plan)
+                .map(|(scene_gpu, graph, parts)| (scene_gpu, Some((graph, parts))))
+        };
+        if uploaded.is_err() {
             self.scene.lights = shown;
         }
-        let (scene_gpu, graph, parts) = rebuilt?;
+        let (scene_gpu, frame) = uploaded?;
         log::info!(
-            "shadows chain of {} ranked again at the view from {}: {} (scene uploaded again and frame rebuilt \
-             in {:.0} ms)",
+            "shadows chain of {} ranked again at the view from {}: {} (scene uploaded again{} in {:.0} ms)",
             self.scene.name,
             view.position,
             plan.chain_names(&self.loaded_lights, &self.scene),
+            if kept { ", frame kept" } else { " and frame rebuilt" },
             start.elapsed().as_secs_f64() * 1e3
         );
-        // The old graph's pipelines use the old scene's descriptor set layout: it goes first.
-        self.graph = graph;
+        if let Some((graph, parts)) = frame {
+            // The old graph's pipelines use the old scene's descriptor set layout: it goes first.
+            self.graph = graph;
+            self.injected = parts.injected;
+            self.hdr_output = parts.hdr_output;
+            self.radiance_cache = parts.radiance_cache;
+            self.last_pass_times.clear();
+        }
         self.scene_gpu = scene_gpu;
         self.plan = plan;
-        self.injected = parts.injected;
-        self.hdr_output = parts.hdr_output;
-        self.radiance_cache = parts.radiance_cache;
         self.ray_batch = None;
-        self.last_pass_times.clear();
         self.prev_view = None;
         self.camera_cut();
-        Ok(true)
+        Ok(if kept { Reranked::SceneUploaded } else { Reranked::FrameRebuilt })
     }
 
     /// The names of the shadows chain's lights, punctual and mesh lights.
