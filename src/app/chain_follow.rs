@@ -3,8 +3,8 @@
 //! camera that flies into another room would keep those four and leave that room's lights to
 //! gi's resampling. So where the camera comes to rest, and after a switch of scene cameras,
 //! the chain is ranked again at the view (`Renderer::rank_chain_for`). Not while it moves: a
-//! new chain rebuilds the frame and restarts its histories, which every step of a walk would
-//! do.
+//! new chain restarts the frame's histories (and may rebuild its passes), which every step of
+//! a walk would do.
 
 use super::Viewer;
 use crate::render::{Reranked, ViewOverride};
