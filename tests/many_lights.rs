@@ -599,13 +599,13 @@ fn four_a_room(points: bool) -> Scene {
 /// the sealed room's lights were resampled). `Renderer::rank_chain_for` at a view in the sealed
 /// room gives the chain that room's four lights, the same view again changes nothing, and the
 /// camera room's view takes the chain back. With sphere lights there the frame is rebuilt (the
-/// soft-shadow passes come and go); with point lights the passes stay and only the scene is
-/// uploaded again. At the sealed room's view the frame keeps the reference's light
+/// soft-shadow passes come and go); with point lights the passes stay and only the light
+/// tables are made again. At the sealed room's view the frame keeps the reference's light
 /// (DENOISED_TOLERANCE) and is closer to it than the frame whose chain stayed with the camera
 /// room. Measured (2026-12-07, ray query, 64x64, frame 16 denoised against 256 spp): sphere
 /// lights, relative L1 0.0427 (re-ranked) against 0.0535 (kept), mean luminance 2.341 and
 /// 2.336 against 2.399, rebuilt in 1.5-2.0 s, nearly all of it the passes' pipelines; point
-/// lights, 0.1165 against 0.1281, mean 0.372 and 0.364 against 0.383, uploaded in 14 ms.
+/// lights, 0.1165 against 0.1281, mean 0.372 and 0.364 against 0.383, the tables made in 3 ms.
 #[test]
 fn the_chain_follows_the_view_into_the_other_room() {
     use hybrid_rt::render::Reranked;
@@ -616,7 +616,7 @@ fn the_chain_follows_the_view_into_the_other_room() {
     let at = |r: &hybrid_rt::render::Renderer| r.view_of(&r.pose_of(r.frame_index));
     for points in [false, true] {
         let what = if points { "point lights" } else { "sphere lights" };
-        let changed = if points { Reranked::SceneUploaded } else { Reranked::FrameRebuilt };
+        let changed = if points { Reranked::TablesRemade } else { Reranked::FrameRebuilt };
         let frame_at_sealed_room = |rerank: bool| {
             let mut r = common::renderer(&ctx, four_a_room(points), settings(true), backend);
             assert!(chain_of(&r).iter().all(|n| n.starts_with("visible.")), "first view: {:?}", chain_of(&r));

@@ -21,6 +21,7 @@ use crate::graph::{Graph, Output, PassTime, Resource};
 use crate::image_io::CpuImage;
 use crate::passes::{self, PassBuilder};
 use crate::scene::{Pose, Scene};
+use crate::world::lights::{ChainLights, LightTables};
 use crate::world::{FrameUniforms, SceneGpu, brdf, scene_gpu};
 use anyhow::{Result, bail};
 use glam::Vec2;
@@ -132,9 +133,9 @@ pub struct Renderer {
     /// The scene's lights as loaded, before the plan culled and ordered them: the shadows
     /// chain is ranked again from these (`rank_chain_for`).
     loaded_lights: Vec<crate::scene::Light>,
-    /// What `scene_gpu` was uploaded with, to upload it again.
+    /// The environment `scene_gpu` was uploaded with, which the light tables are made from
+    /// again when the shadows chain is ranked again.
     environment: crate::world::environment::EnvironmentData,
-    backend: Backend,
     pub ctx: Arc<Context>,
     pool: CommandPool,
     pub scene: Scene,
@@ -210,61 +211,34 @@ fn frame_plan(scene: &Scene, settings: &Settings, views: &[View]) -> plan::Frame
 pub enum Reranked {
     /// The chain keeps its lights.
     Same,
-    /// Other punctual lights hold the channels, with the same passes: the scene's lights and
-    /// their tables were uploaded again, the frame's passes kept.
-    SceneUploaded,
-    /// The new lights need other passes (soft shadows on or off, mesh lights): the frame was
-    /// rebuilt too.
+    /// Other punctual lights hold the channels, with the same passes: the light tables were
+    /// made again, the frame's passes kept.
+    TablesRemade,
+    /// The new lights need other passes (soft shadows on or off, mesh lights): the light
+    /// tables were made again and the frame rebuilt.
     FrameRebuilt,
 }
 
-/// What a scene is put on the GPU with, and its frame built: at start-up and when the shadows
-/// chain is ranked again (`Renderer::rank_chain_for`).
-struct Upload<'a> {
-    ctx: &'a Arc<Context>,
-    pool: &'a CommandPool,
-    shaders: &'a ShaderLibrary,
-    backend: Backend,
-    environment: &'a crate::world::environment::EnvironmentData,
-    settings: &'a Settings,
+/// The instances of `plan`'s mesh lights, which the light tables flag (`ChainLights::meshes`).
+fn chain_meshes(plan: &plan::FramePlan) -> Vec<u32> {
+    plan.chain_emitters.iter().map(|c| c.0).collect()
 }
 
-impl Upload<'_> {
-    /// `scene` (its lights in `plan`'s shading order) on the GPU at `pose`.
-    fn scene(&self, scene: &Scene, pose: &Pose, plan: &plan::FramePlan) -> Result<SceneGpu> {
-        SceneGpu::upload(
-            self.ctx,
-            self.pool,
-            self.shaders,
-            scene,
-            pose,
-            self.backend,
-            self.environment,
-            self.settings.brdf,
-            self.settings.light_grid,
-            crate::world::lights::ChainLights {
-                punctual: plan.chain_punctual,
-                meshes: &plan.chain_emitters.iter().map(|c| c.0).collect::<Vec<_>>(),
-            },
-        )
-    }
-
-    /// `scene` (its lights in `plan`'s shading order) on the GPU at `pose`, and the frame's
-    /// passes for `plan`, with what they hand back besides.
-    fn scene_and_frame(
-        &self,
-        scene: &Scene,
-        pose: &Pose,
-        plan: &plan::FramePlan,
-    ) -> Result<(SceneGpu, Graph, frame::HybridFrame)> {
-        let s = self.settings;
-        let scene_gpu = self.scene(scene, pose, plan)?;
-        let b = PassBuilder { ctx: self.ctx, shaders: self.shaders, scene: &scene_gpu };
-        let mut parts = frame_parts(&b, s, plan)?;
-        let extent = vk::Extent2D { width: s.width, height: s.height };
-        let graph = Graph::new(self.ctx, std::mem::take(&mut parts.passes), extent)?;
-        Ok((scene_gpu, graph, parts))
-    }
+/// The frame graph of `plan`'s passes under `settings` on `scene`, and what the passes hand
+/// back besides: at start-up, on a rebuild (`Renderer::rebuild_frame`) and where the shadows
+/// chain's new lights need other passes (`Renderer::rank_chain_for`).
+fn build_frame(
+    ctx: &Arc<Context>,
+    shaders: &ShaderLibrary,
+    scene: &SceneGpu,
+    settings: &Settings,
+    plan: &plan::FramePlan,
+) -> Result<(Graph, frame::HybridFrame)> {
+    let b = PassBuilder { ctx, shaders, scene };
+    let mut parts = frame_parts(&b, settings, plan)?;
+    let extent = vk::Extent2D { width: settings.width, height: settings.height };
+    let graph = Graph::new(ctx, std::mem::take(&mut parts.passes), extent)?;
+    Ok((graph, parts))
 }
 
 /// The passes of a frame for `settings`, the images the CPU feeds into it and its HDR output.
@@ -323,15 +297,25 @@ impl Renderer {
         let pose = scene.evaluate(settings.start_time);
         let (lo, hi) = scene.bounds(&pose);
         let scene_centre = if lo.is_finite() && hi.is_finite() { (lo + hi) * 0.5 } else { glam::Vec3::ZERO };
-        let gpu = Upload { ctx, pool: &pool, shaders, backend, environment: &environment, settings: &settings };
-        let (scene_gpu, graph, parts) = gpu.scene_and_frame(&scene, &pose, &plan)?;
+        let scene_gpu = SceneGpu::upload(
+            ctx,
+            &pool,
+            shaders,
+            &scene,
+            &pose,
+            backend,
+            &environment,
+            settings.brdf,
+            settings.light_grid,
+            ChainLights { punctual: plan.chain_punctual, meshes: &chain_meshes(&plan) },
+        )?;
+        let (graph, parts) = build_frame(ctx, shaders, &scene_gpu, &settings, &plan)?;
         let (injected, hdr_output, radiance_cache) = (parts.injected, parts.hdr_output, parts.radiance_cache);
         Ok(Self {
             plan,
             lighting,
             loaded_lights,
             environment,
-            backend,
             ctx: ctx.clone(),
             pool,
             scene,
@@ -372,10 +356,8 @@ impl Renderer {
         if s.width == 0 || s.height == 0 || s.width > limit || s.height > limit {
             bail!("image size {}x{} is outside what the device supports (1..={limit} per side)", s.width, s.height);
         }
-        let b = PassBuilder { ctx: &self.ctx, shaders, scene: &self.scene_gpu };
-        let parts = frame_parts(&b, s, &self.plan)?;
-        let extent = vk::Extent2D { width: s.width, height: s.height };
-        self.graph = Graph::new(&self.ctx, parts.passes, extent)?;
+        let (graph, parts) = build_frame(&self.ctx, shaders, &self.scene_gpu, s, &self.plan)?;
+        self.graph = graph;
         self.injected = parts.injected;
         self.hdr_output = parts.hdr_output;
         self.radiance_cache = parts.radiance_cache;
@@ -387,9 +369,10 @@ impl Renderer {
     /// Ranks the shadows chain's lights again by what they bring to `view` (the plan ranked them
     /// by the camera's views at the start; the viewer asks again where its camera comes to
     /// rest, and after a switch of cameras). Where that gives the chain other lights, the
-    /// scene's lights and their tables are uploaded again in the new order, and the frame's
-    /// passes are rebuilt where the new lights need other ones (soft shadows on or off, mesh
-    /// lights; `frame::same_passes`). Every temporal history starts anew. Says what changed;
+    /// scene's lights take the new shading order and their tables are made again (the rest of
+    /// the scene stays on the GPU), and the frame's passes are rebuilt where the new lights
+    /// need other ones (soft shadows on or off, mesh lights; `frame::same_passes`). Every
+    /// temporal history starts anew. Says what changed;
     /// nothing does where the settings rank by power, or four lights or fewer compete. On
     /// error the old frame stays as it was.
     pub fn rank_chain_for(&mut self, shaders: &ShaderLibrary, view: &View) -> Result<Reranked> {
@@ -404,31 +387,26 @@ impl Renderer {
             return Ok(Reranked::Same);
         }
         self.scene.lights = plan.light_order.iter().map(|&i| self.loaded_lights[i].clone()).collect();
-        let gpu = Upload {
-            ctx: &self.ctx,
-            pool: &self.pool,
-            shaders,
-            backend: self.backend,
-            environment: &self.environment,
-            settings: &self.settings,
-        };
         let pose = self.pose_of(self.frame_index);
-        // The passes hold nothing of the scene's but its descriptor set layout, which every
-        // upload makes alike (Vulkan: "identically defined", so the pipelines bind the new
-        // set): where the plan keeps the same passes, only the scene is uploaded again.
+        // The scene stays on the GPU but for its light tables. The passes hold nothing of the
+        // scene's but its descriptor set layout, which stays too: where the plan keeps the
+        // same passes, they stay as well.
         let kept = frame::same_passes(&self.plan, &plan);
-        let uploaded = if kept {
-            gpu.scene(&self.scene, &pose, &plan).map(|scene_gpu| (scene_gpu, None))
-        } else {
-            gpu.scene_and_frame(&self.scene, &pose, &plan)
-                .map(|(scene_gpu, graph, parts)| (scene_gpu, Some((graph, parts))))
-        };
-        if uploaded.is_err() {
+        let light_grid = self.settings.light_grid;
+        let (ctx, pool, env) = (&self.ctx, &self.pool, &self.environment);
+        let chain = ChainLights { punctual: plan.chain_punctual, meshes: &chain_meshes(&plan) };
+        let built = LightTables::new(ctx, pool, &self.scene, &pose, env, light_grid, chain).and_then(|t| {
+            let frame =
+                if kept { None } else { Some(build_frame(ctx, shaders, &self.scene_gpu, &self.settings, &plan)?) };
+            Ok((t, frame))
+        });
+        if built.is_err() {
             self.scene.lights = shown;
         }
-        let (scene_gpu, frame) = uploaded?;
+        let (tables, frame) = built?;
+        self.scene_gpu.set_light_tables(tables);
         log::info!(
-            "shadows chain of {} ranked again at the view from {}: {} (scene uploaded again{} in {:.0} ms)",
+            "shadows chain of {} ranked again at the view from {}: {} (light tables made again{} in {:.0} ms)",
             self.scene.name,
             view.position,
             plan.chain_names(&self.loaded_lights, &self.scene),
@@ -436,19 +414,16 @@ impl Renderer {
             start.elapsed().as_secs_f64() * 1e3
         );
         if let Some((graph, parts)) = frame {
-            // The old graph's pipelines use the old scene's descriptor set layout: it goes first.
             self.graph = graph;
             self.injected = parts.injected;
             self.hdr_output = parts.hdr_output;
             self.radiance_cache = parts.radiance_cache;
             self.last_pass_times.clear();
         }
-        self.scene_gpu = scene_gpu;
         self.plan = plan;
-        self.ray_batch = None;
         self.prev_view = None;
         self.camera_cut();
-        Ok(if kept { Reranked::SceneUploaded } else { Reranked::FrameRebuilt })
+        Ok(if kept { Reranked::TablesRemade } else { Reranked::FrameRebuilt })
     }
 
     /// The names of the shadows chain's lights, punctual and mesh lights.

@@ -268,6 +268,15 @@ impl LightTables {
         Ok(tables)
     }
 
+    /// Takes over what `old` knew of the deformed emissive meshes' shapes (the deformer and
+    /// the skinning report a shape only when it changes), and builds the emitters from them at
+    /// the next `update`: tables made again for another shadows chain
+    /// (`SceneGpu::set_chain`).
+    pub fn inherit_shapes(&mut self, old: LightTables) {
+        self.shapes = old.shapes;
+        self.built_for = None;
+    }
+
     pub fn write_set(&self, set: &DescriptorSet) {
         set.write_buffer(binding::LIGHT_TABLE, BindingKind::StorageBuffer, self.table.buffer());
         set.write_buffer(binding::EMITTERS, BindingKind::StorageBuffer, self.emitters.buffer());

@@ -398,6 +398,18 @@ impl SceneGpu {
         Ok(())
     }
 
+    /// Puts `tables` (made for another shadows chain, with the scene's lights in its new
+    /// shading order: `Renderer::rank_chain_for`) in place of the light tables, in the scene's
+    /// descriptor set too. Everything else stays; the next `update_pose` writes the lights in
+    /// their new order and rebuilds the light grid. Call between frames: the set must not be in
+    /// use.
+    pub fn set_light_tables(&mut self, tables: LightTables) {
+        tables.write_set(&self.set);
+        let old = std::mem::replace(&mut self.light_tables, tables);
+        self.light_tables.inherit_shapes(old);
+        self.prev_lights = None;
+    }
+
     /// Records what makes the GPU scene current before the frame's passes: a rebuilt light grid
     /// copied in, deformed vertices copied into the vertex buffer, then the ray backend's
     /// structures refit or rebuilt over them.
