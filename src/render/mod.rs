@@ -356,14 +356,19 @@ impl Renderer {
         if s.width == 0 || s.height == 0 || s.width > limit || s.height > limit {
             bail!("image size {}x{} is outside what the device supports (1..={limit} per side)", s.width, s.height);
         }
-        let (graph, parts) = build_frame(&self.ctx, shaders, &self.scene_gpu, s, &self.plan)?;
+        let built = build_frame(&self.ctx, shaders, &self.scene_gpu, s, &self.plan)?;
+        self.install_frame(built);
+        self.camera_cut();
+        Ok(())
+    }
+
+    /// Puts a frame `build_frame` made in place of the one in use.
+    fn install_frame(&mut self, (graph, parts): (Graph, frame::HybridFrame)) {
         self.graph = graph;
         self.injected = parts.injected;
         self.hdr_output = parts.hdr_output;
         self.radiance_cache = parts.radiance_cache;
         self.last_pass_times.clear();
-        self.camera_cut();
-        Ok(())
     }
 
     /// Ranks the shadows chain's lights again by what they bring to `view` (the plan ranked them
@@ -413,12 +418,8 @@ impl Renderer {
             if kept { ", frame kept" } else { " and frame rebuilt" },
             start.elapsed().as_secs_f64() * 1e3
         );
-        if let Some((graph, parts)) = frame {
-            self.graph = graph;
-            self.injected = parts.injected;
-            self.hdr_output = parts.hdr_output;
-            self.radiance_cache = parts.radiance_cache;
-            self.last_pass_times.clear();
+        if let Some(built) = frame {
+            self.install_frame(built);
         }
         self.plan = plan;
         self.prev_view = None;
