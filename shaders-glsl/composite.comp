@@ -6,8 +6,8 @@
 //   ray-traced visibility (coloured by shadows.tint where tinted glass is on the way)
 // + the diffuse signal (gi: the other emitters, environment, the other punctual lights
 //   resampled, every bounce; demodulated) times the diffuse albedo
-// + the specular signal (reflections, with gi's specular lobe of the resampled lights, and
-//   what glass lets through).
+// + the specular signal (reflections, with gi's specular lobe of the resampled lights)
+// + what glass and blended surfaces let through (reflections.let_through, its own signal).
 // Pixels that hit nothing show the environment.
 #extension GL_GOOGLE_include_directive : require
 #include "common/scene.glsl"
@@ -24,6 +24,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform CompositeParams {
     uint tinted;             // 1: shadows.tint colours the visibility (some thin glass is tinted)
     float roughness_cutoff;  // the reflections pass's (see mesh_light_radiance)
+    uint let_through;        // 1: some surface lets light through (in_let_through is full size)
     uvec4 mesh_first_emitter;  // per channel of the shadows chain, a mesh light's first emitter
     uvec4 mesh_triangles;      // and its triangles (0: not a mesh light)
 } cp;
@@ -40,7 +41,8 @@ layout(set = 1, binding = 6, rgba16f) uniform readonly image2D in_visibility;
 layout(set = 1, binding = 7, rgba32ui) uniform readonly uimage2D in_tint;  // 1x1 unless cp.tinted
 layout(set = 1, binding = 8) uniform sampler2D in_diffuse;
 layout(set = 1, binding = 9) uniform sampler2D in_specular;
-layout(set = 1, binding = 10, rgba32f) uniform writeonly image2D out_color;
+layout(set = 1, binding = 10) uniform sampler2D in_let_through;  // 1x1 unless cp.let_through
+layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 
 // Specular anti-aliasing of the punctual lights (after Kaplanyan et al. 2016 and Tokuyoshi and
 // Kaplanyan 2019): a point light's highlight on a curved glossy surface can be smaller than a
@@ -106,10 +108,10 @@ void main() {
     MaterialInfo mi = materials[ids.y];
     BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, dielectric_f0(mi.ior));
 
-    // Glass lets the share `transmission` of its diffuse light through instead (reflections
-    // adds what comes through).
+    // Glass lets the share `transmission` of its diffuse light through instead (in_let_through
+    // is what comes through).
     float transmission = mr.w;
-    // A blended surface covers the share alpha of the pixel; reflections adds what shows
+    // A blended surface covers the share alpha of the pixel; in_let_through is what shows
     // through the rest.
     float cover = (mi.flags & MATERIAL_BLEND) != 0u ? imageLoad(g_base_color, px).a : 1.0;
 
@@ -130,5 +132,6 @@ void main() {
     // The diffuse signal is the lobe without its albedo (gi.comp).
     radiance += (1.0 - transmission) * brdf_diffuse_albedo(m) * texelFetch(in_diffuse, px, 0).rgb;
     radiance = cover * radiance + texelFetch(in_specular, px, 0).rgb;
+    if (cp.let_through != 0u) radiance += texelFetch(in_let_through, px, 0).rgb;
     imageStore(out_color, px, vec4(radiance, 1.0));
 }

@@ -9,10 +9,12 @@
 // that do: the highlight went missing). Surfaces
 // rougher than the cut-off trace nothing and take the specular estimate the gi pass made from
 // its own samples (gi.specular); under the cut-off gi.specular holds the lobe's share of the
-// resampled punctual lights, which no ray can hit, and is added. Transmissive surfaces add the
-// light they let through (one path through the glass, transmitted_radiance). The output is the
-// lobe's contribution (Fresnel and shadowing included), ready to add; the hit distance goes
-// alongside for the denoiser.
+// resampled punctual lights, which no ray can hit, and is added. The output is the lobe's
+// contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
+// for the denoiser. What transmissive and blended surfaces let through (one path through the
+// glass, transmitted_radiance; the view ray continued past a blend, behind_blend) is a signal
+// of its own, out_let_through, with where it was seen: its history follows that, the
+// reflection's its own hit, and each has its denoiser.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
@@ -21,7 +23,7 @@
 #include "common/area_lights.glsl"
 #include "common/gbuffer.glsl"
 #include "common/ray_offset.glsl"
-#define RC_BINDING 9
+#define RC_BINDING 10
 // A mirror shows the cache's answer at its reflection's hit unfiltered: read it blended.
 #define RC_BLEND_FIRST
 #include "common/radiance_cache.glsl"
@@ -38,12 +40,16 @@ layout(set = 1, binding = 5, rg32ui) uniform readonly uimage2D g_ids;
 layout(set = 1, binding = 6, rgba32f) uniform readonly image2D in_specular;
 layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D out_radiance;
 layout(set = 1, binding = 8, r32f) uniform writeonly image2D out_hit_distance;
+// rgb what the surface lets through, alpha where along the view ray it was seen (1x1 and
+// unwritten unless params.let_through).
+layout(set = 1, binding = 9, rgba32f) uniform writeonly image2D out_let_through;
 
 layout(push_constant) uniform Params {
     uint rays;                // specular rays per pixel
     float roughness_cutoff;   // rougher surfaces use the environment fallback
     uint seed;
     uint bounces;             // with the cache off: path vertices traced from a hit (gi's)
+    uint let_through;         // 1: some surface lets light through; write out_let_through
 } params;
 
 #define SALT_REFLECTIONS 0x72656600u
@@ -171,16 +177,6 @@ vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng, out float
     return vec3(0.0);
 }
 
-// reflections.hit_distance: where the specular signal's history is fetched from. A positive
-// distance is the reflection's (its virtual point, followed as far as the lobe is narrow), a
-// negative one that of what the surface lets through along the view ray (thin glass, a blended
-// surface: there, whatever the roughness), 0 the surface itself. It follows whichever of the
-// reflected and the let-through light is the larger.
-float history_distance(vec3 reflected, float reflected_at, vec3 through, float through_at) {
-    if (through_at > 0.0 && luminance(through) >= luminance(reflected)) return -through_at;
-    return reflected_at;
-}
-
 // The glossy lobe's light sample of the emitters and the environment (area_light_sample), with
 // a shadow ray that passes see-through surfaces, weighted against the lobe's own ray by the
 // power heuristic.
@@ -200,6 +196,7 @@ void main() {
     if (imageLoad(g_ids, px).x == NO_INSTANCE) {
         imageStore(out_radiance, px, vec4(0.0));
         imageStore(out_hit_distance, px, vec4(0.0));
+        if (params.let_through != 0u) imageStore(out_let_through, px, vec4(0.0));
         return;
     }
     float depth = imageLoad(g_depth, px).r;
@@ -214,7 +211,7 @@ void main() {
     float n_dot_v = max(dot(n, v), 1e-4);
     Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
 
-    // Glass: what it lets through joins the specular signal (composite leaves its share out of
+    // Glass: what it lets through goes to out_let_through (composite leaves its share out of
     // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
     float transmitted = mr.w * (1.0 - m.metallic);
     float seen_at = 0.0;
@@ -228,14 +225,16 @@ void main() {
         cover = imageLoad(g_base_color, px).a;
         if (cover < 1.0) behind = (1.0 - cover) * behind_blend(p, ng, v, depth, rng, behind_at);
     }
-    // What the pixel shows through the surface: behind a blend, else through the glass.
-    bool behind_wins = luminance(behind) >= luminance(cover * through);
-    vec3 let_through = behind_wins ? behind : cover * through;
-    float let_through_at = behind_wins ? behind_at : seen_at;
+    // What the pixel shows through the surface, and where its history is: that of the larger
+    // of what lies behind a blend and what comes through the glass.
+    if (params.let_through != 0u) {
+        float at = luminance(behind) >= luminance(cover * through) ? behind_at : seen_at;
+        imageStore(out_let_through, px, vec4(cover * through + behind, at));
+    }
 
     if (m.roughness > params.roughness_cutoff) {
-        imageStore(out_radiance, px, vec4(cover * (imageLoad(in_specular, px).rgb + through) + behind, 1.0));
-        imageStore(out_hit_distance, px, vec4(history_distance(vec3(0.0), 0.0, let_through, let_through_at)));
+        imageStore(out_radiance, px, vec4(cover * imageLoad(in_specular, px).rgb, 1.0));
+        imageStore(out_hit_distance, px, vec4(0.0));
         return;
     }
     vec3 origin = offset_ray_origin(p, ng, depth);
@@ -287,7 +286,6 @@ void main() {
         }
     }
     vec3 reflected = sum / float(count);
-    imageStore(out_radiance, px, vec4(cover * (reflected + imageLoad(in_specular, px).rgb + through) + behind, 1.0));
-    float reflected_at = hits > 0.0 ? dist_sum / hits : 0.0;
-    imageStore(out_hit_distance, px, vec4(history_distance(cover * reflected, reflected_at, let_through, let_through_at)));
+    imageStore(out_radiance, px, vec4(cover * (reflected + imageLoad(in_specular, px).rgb), 1.0));
+    imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
 }

@@ -8,10 +8,9 @@
 // every silhouette, where the jitter alternates between two surfaces, and nothing would be
 // anti-aliased.) On a metal with a narrow lobe, whose colour is all reflection, the history is
 // fetched where the reflected object was (common/reflection_motion.glsl), as the specular
-// chain's SVGF history is, and on glass or a blended surface, whose colour is partly what
-// lies behind them, where whichever of the reflected and the let-through light is the larger
-// was (reflections.hit_distance says which), for its share of the colour; the disocclusion
-// test still asks about the surface. Where the light changed, the history is dropped: where the
+// chain's SVGF history is, and on glass or a blended surface where what they let through
+// carries most of the colour (reflections.let_through, seen along the view ray), where that
+// was, for its share of the colour; the disocclusion test still asks about the surface. Where the light changed, the history is dropped: where the
 // frame says its lights changed and the neighbourhood's mean moved away from the history, and
 // where a radiance cache cell restarted or the pixel's resampled light went into shadow (an
 // occluder the frame was not told of); else the clamp box of a noisy neighbourhood lets the old
@@ -33,12 +32,14 @@ layout(set = 1, binding = 4, rg32f) uniform readonly image2D g_depth;
 layout(set = 1, binding = 5, rgba8) uniform readonly image2D g_metal_rough;
 // reflections.hit_distance (a zero image when the frame traces no reflection rays).
 layout(set = 1, binding = 6, r32f) uniform readonly image2D in_hit_distance;
-layout(set = 1, binding = 7, rgba16f) uniform readonly image2D g_base_color;
-layout(set = 1, binding = 8, rg32ui) uniform readonly uimage2D g_ids;
 // radiance_cache.changed and gi.light_lost (zero images where the frame has no cache or no
 // resampled light).
-layout(set = 1, binding = 9, r32f) uniform readonly image2D in_cache_changed;
-layout(set = 1, binding = 10, rg32f) uniform readonly image2D in_light_lost;
+layout(set = 1, binding = 7, rgba16f) uniform readonly image2D g_base_color;
+layout(set = 1, binding = 8, r32f) uniform readonly image2D in_cache_changed;
+layout(set = 1, binding = 9, rg32f) uniform readonly image2D in_light_lost;
+// reflections.let_through: rgb the light, alpha where along the view ray it was seen (1x1
+// unless taa.let_through).
+layout(set = 1, binding = 10, rgba32f) uniform readonly image2D in_let_through;
 layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 
 // Motion vectors differing by more than this many pixels belong to different surfaces.
@@ -56,6 +57,7 @@ layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 layout(push_constant) uniform TaaParams {
     float blend;        // weight of the new frame where the image holds still
     float fast_motion;  // pixels a frame from which the new frame is taken whole
+    uint let_through;   // 1: some surface lets light through (in_let_through is full size)
 } taa;
 
 vec3 to_ycocg(vec3 c) {
@@ -116,23 +118,22 @@ void main() {
         valid = length(prev_surface_motion - motion) <= DISOCCLUSION_MOTION;
     }
     vec4 metal_rough = imageLoad(g_metal_rough, px);
+    // The share of the colour that the history follows away from the surface, and how far
+    // beyond it along the view ray: what the surface lets through where that is most of the
+    // colour (whatever the roughness), else what a narrow lobe reflects (the metal's, the
+    // glass's).
     float hit = imageLoad(in_hit_distance, px).r;
-    // The share of the colour that the history follows away from the surface: what a narrow
-    // lobe reflects (the metal's, or the glass's where its reflection is the larger: positive
-    // hit distances), or what the surface lets through (negative: the glass's transmitted
-    // share, a blended surface's uncovered one, whatever the roughness).
-    float glass = metal_rough.w * (1.0 - metal_rough.x);
-    float mirror;
-    if (hit < 0.0) {
-        uvec2 ids = imageLoad(g_ids, px).xy;  // instance, material
-        bool blended = ids.x != NO_INSTANCE && (materials[ids.y].flags & MATERIAL_BLEND) != 0u;
-        float cover = blended ? imageLoad(g_base_color, px).a : 1.0;
-        mirror = (1.0 - cover) + cover * glass;
-    } else {
-        mirror = max(metal_rough.x, glass) * reflection_motion_weight(metal_rough.y);
+    float mirror = max(metal_rough.x, metal_rough.w * (1.0 - metal_rough.x)) * reflection_motion_weight(metal_rough.y);
+    if (taa.let_through != 0u) {
+        vec4 through = imageLoad(in_let_through, px);
+        float share = through.a > 0.0 ? clamp(luminance(through.rgb) / max(luminance(cur), 1e-6), 0.0, 1.0) : 0.0;
+        if (share >= 0.5) {
+            hit = through.a;
+            mirror = 1.0;
+        }
     }
-    if (valid && hit != 0.0 && mirror > 0.0) {
-        vec2 reflected = mix(prev_pos, reflection_prev_pos(px, imageLoad(g_depth, px).r, abs(hit)), mirror);
+    if (valid && hit > 0.0 && mirror > 0.0) {
+        vec2 reflected = mix(prev_pos, reflection_prev_pos(px, imageLoad(g_depth, px).r, hit), mirror);
         if (all(greaterThanEqual(reflected, vec2(0.0))) && all(lessThan(reflected, vec2(frame.size)))) prev_pos = reflected;
     }
     vec3 result = cur;

@@ -16,7 +16,7 @@ mod common;
 
 use glam::{DVec3, Vec3};
 use hybrid_rt::gpu::Context;
-use hybrid_rt::passes::pathtrace;
+use hybrid_rt::passes::{self, pathtrace};
 use hybrid_rt::render::{Environment, RenderMode, Settings};
 use hybrid_rt::scene::{Camera, Instance, Material, Scene, builtin, load_gltf};
 use std::sync::Arc;
@@ -105,6 +105,35 @@ fn hybrid_frame_lets_light_through_glass() {
     let want = f + (1.0 - f) * (1.0 - f) * tau / (1.0 - f * tau);
     eprintln!("hybrid frame, absorbing slab head-on: {mean:.4} (closed form {want:.4})");
     assert!((mean - want).abs() < 0.02 * want, "absorbing slab: {mean:.4} vs {want:.4}");
+    common::assert_validation_clean(ctx);
+}
+
+/// What glass lets through is a signal of its own, with its own SVGF chain
+/// (`svgf_temporal_let_through`, `svgf_atrous_let_through_<i>`) and its own output of the
+/// reflections pass (`reflections.let_through`, at the frame's size), in a scene with glass;
+/// a scene without any runs neither (the output 1x1, unwritten). Both still light the sphere
+/// as the closed form says (1 in a white furnace), which the test above checks.
+#[test]
+fn only_glass_runs_the_let_through_chain() {
+    let ctx = common::validated_context();
+    let size = 16;
+    let settings =
+        Settings { width: size, height: size, environment: Environment::Constant(Vec3::ONE), ..Default::default() };
+    let backend = common::auto_backend(&ctx);
+    for (transmission, chain) in [(1.0, true), (0.0, false)] {
+        let mut m = glass(0.0, 0.0);
+        m.transmission = transmission;
+        let sphere = scene(m, builtin::uv_sphere(1.0, 32, 16, 0), 4.0, 0.6);
+        let mut r = common::renderer(&ctx, sphere, settings.clone(), backend);
+        common::render_frames(&mut r, 2);
+        let names = r.graph.pass_names().iter().map(|p| p.to_string()).collect::<Vec<_>>();
+        let stages = ["svgf_temporal_let_through", "svgf_atrous_let_through_0"];
+        assert_eq!(stages.map(|p| names.iter().any(|n| n == p)), [chain; 2], "transmission {transmission}: {names:?}");
+        let through = r.read_output(passes::reflections::LET_THROUGH).unwrap();
+        let want = if chain { size } else { 1 };
+        assert_eq!((through.width, through.height), (want, want), "transmission {transmission}");
+        drop(r);
+    }
     common::assert_validation_clean(ctx);
 }
 

@@ -79,12 +79,6 @@ bool svgf_converged(vec4 c, float history_length) {
 // all of it at 0.35).
 float svgf_footprint(float roughness) { return smoothstep(0.05, 0.35, roughness); }
 
-// The roughness the specular chain treats a pixel's signal by, given reflections.hit_distance:
-// the surface's, but where what the surface lets through carries the signal (a negative
-// distance), none: seen straight through thin glass or past a blended surface, it is as sharp
-// as what a mirror reflects, however rough the surface.
-float svgf_lobe_roughness(float roughness, float hit) { return hit < 0.0 ? 0.0 : roughness; }
-
 // A filtered signal's texel (svgf_temporal's colour, every a-trous iteration's; rgba16f): the
 // colour in rgb, the standard deviation of its luminance in alpha. Half precision because the
 // filter is bound by its loads (8 taps per pixel and signal, each iteration): on lavapipe it cuts
@@ -113,7 +107,8 @@ vec4 svgf_unpack(vec4 texel) { return vec4(texel.rgb, texel.a * texel.a); }
 
 // What an a-trous iteration reads of the pixel it filters, besides its guide texel:
 // svgf_temporal.centre, written by svgf_temporal, which has all of it at hand. x the view
-// depth's fwidth, y the specular signal's footprint (svgf_footprint; 1 for a lone signal), z
+// depth's fwidth, y the specular signal's footprint (svgf_footprint; a lone signal's, 1 but
+// for what surfaces let through), z
 // and w the diffuse and specular history lengths (a lone signal's in z), which the next frame's
 // svgf_temporal reprojects too, in place of an r32f image per signal, so that the texel costs
 // that pass no more stores. Each iteration loads this one texel where it loaded five (the

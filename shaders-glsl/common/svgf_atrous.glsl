@@ -17,7 +17,9 @@
 // The pair filters diffuse and specular in one dispatch: each tap's guide texel (depth, normal,
 // whether there is a surface: gbuffer.normal) is loaded and its depth and normal weights computed
 // once for both, and the filter costs little more than one signal's. A reflection signal's
-// footprint narrows with the roughness (svgf_footprint): a mirror's reflection stays sharp.
+// footprint narrows with the roughness (svgf_footprint): a mirror's reflection stays sharp, as
+// does what smooth glass or a blended surface lets through (a lone signal's footprint, which
+// svgf_temporal_let_through writes; 1 for any other).
 #ifndef SVGF_ATROUS_GLSL
 #define SVGF_ATROUS_GLSL
 
@@ -97,7 +99,7 @@ void main() {
     }
     vec4 centre = imageLoad(in_centre, px);
     float footprint[SIGNALS];
-    [[unroll]] for (int s = 0; s < SIGNALS; ++s) footprint[s] = s == 1 ? centre.y : 1.0;
+    [[unroll]] for (int s = 0; s < SIGNALS; ++s) footprint[s] = s == SIGNALS - 1 ? centre.y : 1.0;
     // Iterations after the first (which feeds the history) leave converged signals as they are
     // (flagged by the iteration before): no footprint keeps the centre alone. Without any
     // signal left to filter, no taps at all.

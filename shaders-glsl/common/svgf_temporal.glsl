@@ -1,5 +1,6 @@
 // svgf_temporal (svgf_temporal.comp: one signal, svgf_temporal_<signal>;
-// svgf_temporal_diffuse_specular.comp: the frame's two, SVGF_PAIR): temporal accumulation of
+// svgf_temporal_diffuse_specular.comp: the frame's two, SVGF_PAIR;
+// svgf_temporal_let_through.comp: what surfaces let through, SVGF_LET_THROUGH): temporal accumulation of
 // demodulated signals. The previous frame's filtered colour (the first a-trous iteration,
 // copied by `history`), moments and history length are reprojected through the motion
 // vectors with bilinear taps that each pass the validity test (on screen, same instance,
@@ -36,9 +37,12 @@
 // behind a mirror, and a moving camera sees it move with that point's parallax, not the
 // surface's. The lobe's width decides between the two (roughness), and caps the history: a
 // glossy reflection changes with the view even where the reprojection is right. (The same
-// width narrows the a-trous filter's footprint: svgf_footprint.) Where what the surface lets
-// through carries more light (thin glass, a blended surface), the history is fetched where
-// that was, on the view ray's line, whatever the roughness.
+// width narrows the a-trous filter's footprint: svgf_footprint.)
+//
+// SVGF_LET_THROUGH: what glass and blended surfaces let through (reflections.let_through), a
+// signal of its own, whose history is fetched where what shows through was, on the view ray's
+// line at the distance the signal's alpha carries; its sharpness is that of the glass's lobe
+// (a blended surface lets it through unaltered, as a mirror reflects).
 #ifndef SVGF_TEMPORAL_GLSL
 #define SVGF_TEMPORAL_GLSL
 
@@ -73,8 +77,8 @@ layout(set = 1, binding = 11, rgba16f) uniform readonly image2D prev_specular;
 layout(set = 1, binding = 12, rg32f) uniform readonly image2D prev_diffuse_moments;
 layout(set = 1, binding = 13, rg32f) uniform readonly image2D prev_specular_moments;
 layout(set = 1, binding = 14, rgba16f) uniform readonly image2D prev_centre;  // svgf_centre: lengths in z, w
-// reflections.hit_distance: mean distance to what the reflection rays hit, negated for what the
-// surface lets through (0: none traced; a zero image without SVGF_SHARP_SPECULAR).
+// reflections.hit_distance: mean distance to what the reflection rays hit (0: none traced; a
+// zero image without SVGF_SHARP_SPECULAR).
 layout(set = 1, binding = 15, r32f) uniform readonly image2D in_hit_distance;
 layout(set = 1, binding = 16, rgba8) uniform readonly image2D g_metal_rough;
 // radiance_cache.changed: 1 where a radiance cache cell around the surface restarted this
@@ -113,14 +117,21 @@ void store_clamped(int s, ivec2 q, vec3 share) {
 }
 #else
 #define SIGNALS 1
+// With SVGF_LET_THROUGH, reflections.let_through: alpha how far along the view ray it was seen.
 layout(set = 1, binding = 8, rgba32f) uniform readonly image2D in_signal;
 layout(set = 1, binding = 9, rgba16f) uniform readonly image2D prev_color;
 layout(set = 1, binding = 10, rg32f) uniform readonly image2D prev_moments;
 layout(set = 1, binding = 11, rgba16f) uniform readonly image2D prev_centre;  // svgf_centre: the length in z
-layout(set = 1, binding = 12, rgba16f) uniform writeonly image2D out_color;
-layout(set = 1, binding = 13, rg32f) uniform writeonly image2D out_moments;
-layout(set = 1, binding = 14, rgba16f) uniform writeonly image2D out_clamped;
-#define SVGF_OUT_REJECTED 15
+#ifdef SVGF_LET_THROUGH
+layout(set = 1, binding = 12, rgba8) uniform readonly image2D g_metal_rough;
+#define SVGF_OUT_FIRST 13
+#else
+#define SVGF_OUT_FIRST 12
+#endif
+layout(set = 1, binding = SVGF_OUT_FIRST, rgba16f) uniform writeonly image2D out_color;
+layout(set = 1, binding = SVGF_OUT_FIRST + 1, rg32f) uniform writeonly image2D out_moments;
+layout(set = 1, binding = SVGF_OUT_FIRST + 2, rgba16f) uniform writeonly image2D out_clamped;
+#define SVGF_OUT_REJECTED (SVGF_OUT_FIRST + 3)
 
 vec3 load_input(int s, ivec2 q) { return imageLoad(in_signal, q).rgb; }
 vec3 load_prev_color(int s, ivec2 q) { return imageLoad(prev_color, q).rgb; }
@@ -425,10 +436,10 @@ void main() {
 #ifdef SVGF_PAIR
     if ((svgf.flags & SVGF_SHARP_SPECULAR) != 0u) {
         float hit = imageLoad(in_hit_distance, px).r;
-        float roughness = svgf_lobe_roughness(imageLoad(g_metal_rough, px).y, hit);
+        float roughness = imageLoad(g_metal_rough, px).y;
         float virtual_weight = reflection_motion_weight(roughness);
-        if (hit != 0.0 && virtual_weight > 0.0) {
-            prev_pos[1] = mix(surface_pos, reflection_prev_pos(px, z, abs(hit)), virtual_weight);
+        if (hit > 0.0 && virtual_weight > 0.0) {
+            prev_pos[1] = mix(surface_pos, reflection_prev_pos(px, z, hit), virtual_weight);
             // The depth test's tolerance: fetched away from the surface's own motion (the
             // virtual point's), the previous sample is on the same surface a few pixels off,
             // where depth differs by about fwidth per pixel.
@@ -436,6 +447,24 @@ void main() {
         }
         cap[1] = mix(GLOSSY_HISTORY_CAP, svgf.history_cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
         footprint[1] = svgf_footprint(roughness);
+    }
+#endif
+#ifdef SVGF_LET_THROUGH
+    {
+        // Seen through thin glass (which does not bend the view ray), past a blended surface, or
+        // out of a slab the way it went in: on the view ray's line `seen_at` beyond the surface,
+        // which moves with that point's parallax, as a mirror's virtual point does.
+        float seen_at = imageLoad(in_signal, px).a;
+        if (seen_at > 0.0) {
+            prev_pos[0] = reflection_prev_pos(px, z, seen_at);
+            fw_tolerance[0] = fw * (1.0 + distance(prev_pos[0], surface_pos));
+        }
+        // As sharp as the glass's lobe leaves it; a blended surface, however rough, lets it
+        // through unaltered.
+        bool blended = (materials[imageLoad(g_ids, px).y].flags & MATERIAL_BLEND) != 0u;
+        float roughness = blended ? 0.0 : imageLoad(g_metal_rough, px).y;
+        cap[0] = mix(GLOSSY_HISTORY_CAP, svgf.history_cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
+        footprint[0] = svgf_footprint(roughness);
     }
 #endif
     // A camera cut, or lights that changed since last frame: the history holds light that is

@@ -6,15 +6,13 @@ use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
 use super::{gbuffer, shadows};
 use crate::gpu::vk;
-use crate::graph::{Output, OutputDesc, Preview, Resource};
+use crate::graph::{self, Output, OutputDesc, Preview, Resource};
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 pub const NAME: &str = "composite";
 pub const COLOR: Output = Output::new(NAME, "color");
 
-/// `diffuse`: demodulated diffuse light (gi, denoised or not); `specular`: the specular lobe's
-/// ray-traced light (reflections, denoised or not).
 /// The push-constant block of composite.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -24,8 +22,19 @@ struct Params {
     /// The reflections pass's: a mesh light's specular lobe on surfaces at or under it is the
     /// reflection rays', above it composite's.
     roughness_cutoff: f32,
-    _pad: [u32; 2],
+    /// 1: `let_through` is full size and added.
+    let_through: u32,
+    _pad: u32,
     mesh_lights: shadows::MeshLights,
+}
+
+/// The signals composite adds, denoised or not: `diffuse`, demodulated diffuse light (gi);
+/// `specular`, the specular lobe's ray-traced light (reflections); `let_through`, what glass
+/// and blended surfaces let through (reflections), where some do.
+pub struct Signals {
+    pub diffuse: Resource,
+    pub specular: Resource,
+    pub let_through: Option<Resource>,
 }
 
 /// `visibility`: the shadows chain's output (see shadows::Chain); `tinted`: the chain writes
@@ -36,8 +45,7 @@ pub fn new(
     tinted: bool,
     mesh_lights: shadows::MeshLights,
     roughness_cutoff: f32,
-    diffuse: Resource,
-    specular: Resource,
+    signals: Signals,
 ) -> Result<FullscreenPass> {
     let mut inputs: Vec<Input> =
         [gbuffer::DEPTH, gbuffer::NORMAL, gbuffer::BASE_COLOR, gbuffer::METAL_ROUGH, gbuffer::EMISSIVE, gbuffer::IDS]
@@ -47,8 +55,10 @@ pub fn new(
         Input::texel(visibility).bound_as("in_visibility"),
         Input::texel(shadows::TINT),
         // Sampled (texelFetch): denoised, they are half precision; raw, full.
-        Input::filtered(diffuse).bound_as("in_diffuse"),
-        Input::filtered(specular).bound_as("in_specular"),
+        Input::filtered(signals.diffuse).bound_as("in_diffuse"),
+        Input::filtered(signals.specular).bound_as("in_specular"),
+        Input::filtered(signals.let_through.unwrap_or(graph::zero(vk::Format::R32G32B32A32_SFLOAT, true)))
+            .bound_as("in_let_through"),
     ]);
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
     FullscreenPass::new(
@@ -57,6 +67,12 @@ pub fn new(
         "composite.comp",
         inputs,
         outputs,
-        &Params { tinted: tinted as u32, roughness_cutoff, _pad: [0; 2], mesh_lights },
+        &Params {
+            tinted: tinted as u32,
+            roughness_cutoff,
+            let_through: signals.let_through.is_some() as u32,
+            _pad: 0,
+            mesh_lights,
+        },
     )
 }

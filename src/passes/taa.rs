@@ -1,7 +1,7 @@
 //! taa: temporal anti-aliasing of the composited HDR frame (shaders-glsl/taa.comp): jittered
 //! G-buffer, Catmull-Rom history, YCoCg neighbourhood clamp, less history the faster the image
 //! moves, history rejected on disocclusion (motion mismatch), a mirror's history fetched where
-//! the reflected object was.
+//! the reflected object was, glass's where what it lets through was.
 
 use super::PassBuilder;
 use super::fullscreen::{FullscreenPass, Input};
@@ -29,12 +29,22 @@ pub const FAST_MOTION: f32 = 4.0;
 pub struct Params {
     pub blend: f32,
     pub fast_motion: f32,
+    /// 1: `reflections::LET_THROUGH` is full size.
+    pub let_through: u32,
 }
 
 /// `input` is the HDR image to resolve (bound as `in_color`); `reflections`: whether the frame
 /// traces reflection rays, whose hit distance moves a mirror's history with what it reflects;
-/// `restarts`: where light the history holds is gone, which drops it there.
-pub fn new(b: &PassBuilder, input: Resource, reflections: bool, restarts: Restarts) -> Result<FullscreenPass> {
+/// `let_through`: whether they write what surfaces let through, which moves glass's history
+/// with what shows through it; `restarts`: where light the history holds is gone, which drops
+/// it there.
+pub fn new(
+    b: &PassBuilder,
+    input: Resource,
+    reflections: bool,
+    let_through: bool,
+    restarts: Restarts,
+) -> Result<FullscreenPass> {
     let hit_distance = Input::texel(reflections::HIT_DISTANCE).bound_as("in_hit_distance");
     let mut inputs = vec![
         Input::texel(input).bound_as("in_color"),
@@ -45,11 +55,18 @@ pub fn new(b: &PassBuilder, input: Resource, reflections: bool, restarts: Restar
         Input::texel(gbuffer::METAL_ROUGH),
         if reflections { hit_distance } else { hit_distance.reading(graph::zero(vk::Format::R32_SFLOAT, false)) },
         Input::texel(gbuffer::BASE_COLOR),
-        Input::texel(gbuffer::IDS),
     ];
     inputs.extend(restarts.inputs());
+    // The shader reads it only with the flag.
+    let through = Input::texel(reflections::LET_THROUGH).bound_as("in_let_through");
+    inputs.push(if let_through {
+        through
+    } else {
+        through.reading(graph::zero(vk::Format::R32G32B32A32_SFLOAT, true))
+    });
     let outputs = vec![OutputDesc::storage(COLOR, vk::Format::R32G32B32A32_SFLOAT, Preview::Color)];
-    FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, &Params { blend: BLEND, fast_motion: FAST_MOTION })
+    let push = Params { blend: BLEND, fast_motion: FAST_MOTION, let_through: let_through as u32 };
+    FullscreenPass::new(b, NAME, "taa.comp", inputs, outputs, &push)
 }
 
 /// What TAA needs from the previous frame: its result and the motion of what it showed.

@@ -1,7 +1,8 @@
 //! The hybrid frame's plan: which passes run, in which order, wired by their typed outputs.
 //!
 //! gbuffer -> [primary_rays] -> shadows chain -> [light_grid_update] -> [radiance_cache] -> gi -> [gi_fill] -> reflections ->
-//! [svgf chains: diffuse on gi, specular on reflections, filtered together] ->
+//! [svgf chains: diffuse on gi, specular on reflections, filtered together; what glass lets
+//! through on its own] ->
 //! composite -> [taa] -> tonemap -> history.
 //! `history` comes last: it keeps what the next frame's temporal passes reproject.
 
@@ -36,7 +37,7 @@ pub struct HybridFrame {
 pub fn same_passes(a: &FramePlan, b: &FramePlan) -> bool {
     let read = |p: &FramePlan| {
         (
-            (p.soft_shadows, p.tinted_shadows, p.gi, p.reflections, p.reservoirs(), p.emitters > 0),
+            (p.soft_shadows, p.tinted_shadows, p.gi, p.reflections, p.let_through, p.reservoirs(), p.emitters > 0),
             (p.chain_punctual, p.chain_emitters.clone(), p.scene_diagonal.to_bits()),
         )
     };
@@ -97,12 +98,14 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
             gi_specular,
             &cache,
             settings.gi.bounces,
+            plan.let_through,
         )?));
         passes::reflections::RADIANCE.into()
     } else {
         gi_specular
     };
     let mut diffuse = gi_diffuse;
+    let mut let_through = plan.let_through.then_some(passes::reflections::LET_THROUGH.into());
     // Where the radiance cache or a pixel's resampled light let go of light that is gone, so do
     // the denoiser's and TAA's histories.
     let restarts = history::Restarts {
@@ -116,6 +119,12 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         passes.extend(chain.passes);
         kept.extend(chain.kept);
         (diffuse, specular) = (chain.outputs[0].into(), chain.outputs[1].into());
+        if plan.let_through {
+            let chain = svgf::let_through(b, &settings.denoise)?;
+            passes.extend(chain.passes);
+            kept.extend(chain.kept);
+            let_through = Some(chain.outputs[0].into());
+        }
     }
     if settings.test_signal {
         let (pass, texels) = inject::new(b.ctx, TEST_INPUT, extent)?;
@@ -131,12 +140,11 @@ pub fn hybrid(b: &PassBuilder, settings: &Settings, plan: &FramePlan) -> Result<
         plan.tinted_shadows,
         mesh_lights,
         settings.reflections.roughness_cutoff,
-        diffuse,
-        specular,
+        passes::composite::Signals { diffuse, specular, let_through },
     )?));
     let mut hdr_output = passes::composite::COLOR;
     if settings.taa {
-        passes.push(Box::new(passes::taa::new(b, hdr_output.into(), plan.reflections, restarts)?));
+        passes.push(Box::new(passes::taa::new(b, hdr_output.into(), plan.reflections, plan.let_through, restarts)?));
         kept.extend(passes::taa::kept());
         hdr_output = passes::taa::COLOR;
     }

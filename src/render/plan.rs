@@ -32,6 +32,10 @@ pub const RIS_CANDIDATES: u32 = 8;
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FramePlan {
     pub reflections: bool,
+    /// Some material is transmissive or blended: the reflections pass writes what those
+    /// surfaces let through as a signal of its own (`reflections.let_through`, 1x1 and
+    /// unwritten otherwise), which its own SVGF chain denoises.
+    pub let_through: bool,
     pub soft_shadows: bool,
     /// Some thin glass is tinted: the shadows chain keeps the colour of what it lets through
     /// (`shadows.tint`, 1x1 and unwritten otherwise).
@@ -101,6 +105,7 @@ impl FramePlan {
         let light_order = crate::world::lights::shading_order(scene, &[], &chain);
         Self {
             reflections: true,
+            let_through: true,
             soft_shadows: true,
             tinted_shadows: true,
             gi: true,
@@ -146,7 +151,8 @@ impl FramePlan {
             .filter(|m| m.is_transmissive() || m.alpha_mode == crate::scene::AlphaMode::Blend)
             .map(|m| m.name.as_str())
             .collect();
-        let reflections = !glossy.is_empty() || !glass.is_empty();
+        let let_through = !glass.is_empty();
+        let reflections = !glossy.is_empty() || let_through;
         reasons.push(if !glass.is_empty() && glossy.is_empty() {
             format!("reflections: traced for what {} transmissive or blended material(s) let through: {}", glass.len(), list(&glass))
         } else if reflections {
@@ -154,6 +160,12 @@ impl FramePlan {
         } else {
             format!("reflections: no rays, no surface is at or under roughness {roughness_cutoff} (gi estimates the specular lobes)")
         });
+        if let_through {
+            reasons.push(format!(
+                "reflections: what {} transmissive or blended material(s) let through is a signal of its own (reflections.let_through), denoised by its own chain",
+                glass.len()
+            ));
+        }
 
         let culled_lights = if scene.is_animated() { Vec::new() } else { out_of_range(scene) };
         let kept: Vec<usize> = (0..scene.lights.len()).filter(|i| !culled_lights.contains(i)).collect();
@@ -289,6 +301,7 @@ impl FramePlan {
         });
         Self {
             reflections,
+            let_through,
             soft_shadows,
             tinted_shadows,
             gi,

@@ -17,6 +17,7 @@
 //! | `stability-glass` | what a glass pane shows while the camera moves sideways past it |
 //! | `stability-blend` | the same past a blended (alpha 0.3) pane |
 //! | `stability-slab` | the same past a slab of glass (a volume) |
+//! | `stability-rough-glass` | the same past a rough glass pane (roughness 0.3) |
 
 use super::animation::{Channel, Interpolation, Property};
 use super::builtin::{cuboid, node, quad, uv_sphere};
@@ -39,6 +40,7 @@ pub const NAMES: &[&str] = &[
     "stability-glass",
     "stability-blend",
     "stability-slab",
+    "stability-rough-glass",
 ];
 
 /// The scene called `name`, if it is one of [`NAMES`].
@@ -58,6 +60,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-glass" => Some(glass()),
         "stability-blend" => Some(blend()),
         "stability-slab" => Some(slab()),
+        "stability-rough-glass" => Some(rough_glass()),
         _ => None,
     }
 }
@@ -608,8 +611,8 @@ fn sunlit_truck(s: &mut Scene, from: Vec3, towards: Vec3) {
     });
 }
 
-/// Names and numbers of `stability-glass`, `stability-blend` and `stability-slab` the scenarios
-/// use.
+/// Names and numbers of `stability-glass`, `stability-blend`, `stability-slab` and
+/// `stability-rough-glass` the scenarios use.
 pub mod glass_facts {
     /// The pane's instance (after the wall's).
     pub const PANE_INSTANCE: u32 = 1;
@@ -631,6 +634,20 @@ pub fn glass() -> Scene {
         ..Default::default()
     };
     pane_before_wall("builtin:stability-glass", pane, thin_pane())
+}
+
+/// As `stability-glass`, the pane rough (0.3): what it lets through is a blurred, noisy image
+/// of the wall, which the denoiser must average without smearing it as the camera moves.
+pub fn rough_glass() -> Scene {
+    let pane = Material {
+        name: "frosted".into(),
+        base_color_factor: Vec4::ONE,
+        metallic_factor: 0.0,
+        roughness_factor: 0.3,
+        transmission: 1.0,
+        ..Default::default()
+    };
+    pane_before_wall("builtin:stability-rough-glass", pane, thin_pane())
 }
 
 /// As `stability-glass`, with a rough blended pane (alpha 0.3) in the glass's place: 70% of

@@ -4,8 +4,9 @@
 //! `svgf_temporal_diffuse_specular` (each signal's colour carries the luminance's deviation in
 //! alpha) -> `svgf_atrous_diffuse_specular_0` ... `_<n-1>`, each stage filtering both at once,
 //!
-//! and a lone signal (the tests' injected one) the same with `svgf_temporal_<signal>` and
-//! `svgf_atrous_<signal>_<i>`. Each stage is a pass instance with its own named outputs, so
+//! what glass and blended surfaces let through, `svgf_temporal_let_through` ->
+//! `svgf_atrous_let_through_<i>`, and a lone signal (the tests' injected one) the same with
+//! `svgf_temporal_<signal>` and `svgf_atrous_<signal>_<i>`. Each stage is a pass instance with its own named outputs, so
 //! `--dump-passes` shows the chain step by step. The first a-trous iteration's colour, and the
 //! temporal moments and history length, are kept for the next frame by the `history` pass.
 //! What the edge-stopping weights read of a neighbour (shading normal and view depth) is one
@@ -29,6 +30,9 @@ pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// The run name of the pair's stages (`svgf_temporal_diffuse_specular`,
 /// `svgf_atrous_diffuse_specular_0`).
 pub const PAIR: &str = "diffuse_specular";
+
+/// The run name of the chain of what surfaces let through (`svgf_temporal_let_through`).
+pub const LET_THROUGH: &str = "let_through";
 
 /// common/svgf.glsl's SVGF_SHARP_SPECULAR: the pair's specular signal is made of reflection
 /// rays (a narrow lobe's history follows the reflected object, its filter keeps it sharp).
@@ -166,9 +170,22 @@ pub fn pair(
 
 /// The chain of one demodulated RGBA32F signal, `input`, under the name `signal`.
 pub fn single(b: &PassBuilder, signal: &'static str, input: Resource, s: &SvgfSettings) -> Result<Chain> {
+    let filtered = atrous::COLOR.of(iteration(signal, 0));
+    lone(b, signal, temporal::single(b, signal, input, filtered, s)?, s)
+}
+
+/// The chain of what glass and blended surfaces let through (`reflections::LET_THROUGH`): its
+/// history follows what shows through them, its filter is as sharp as their lobe.
+pub fn let_through(b: &PassBuilder, s: &SvgfSettings) -> Result<Chain> {
+    let filtered = atrous::COLOR.of(iteration(LET_THROUGH, 0));
+    lone(b, LET_THROUGH, temporal::let_through(b, filtered, s)?, s)
+}
+
+/// A lone signal's chain under the name `signal`, from its temporal stage.
+fn lone(b: &PassBuilder, signal: &'static str, stage: impl Pass + 'static, s: &SvgfSettings) -> Result<Chain> {
     let iterations = s.iterations.max(1);
     let filtered = atrous::COLOR.of(iteration(signal, 0));
-    let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(temporal::single(b, signal, input, filtered, s)?)];
+    let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(stage)];
     for i in 0..iterations {
         passes.push(Box::new(atrous::single(b, signal, i, s)?));
     }

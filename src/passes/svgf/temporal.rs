@@ -4,7 +4,9 @@
 //! The frame's diffuse and specular signals are accumulated together,
 //! `svgf_temporal_diffuse_specular` (svgf_temporal_diffuse_specular.comp), sharing the G-buffer's
 //! and the outlier window's loads; when the specular signal is made of reflection rays, a
-//! narrow lobe's history is reprojected from the reflected object's virtual position. Any other
+//! narrow lobe's history is reprojected from the reflected object's virtual position. What glass
+//! and blended surfaces let through on its own, `svgf_temporal_let_through`
+//! (svgf_temporal_let_through.comp), its history reprojected from where that was seen. Any other
 //! signal on its own, `svgf_temporal_<signal>` (svgf_temporal.comp).
 
 use super::{COLOR_FORMAT, PAIR, SHARP_SPECULAR, SvgfSettings, signal};
@@ -129,13 +131,27 @@ pub fn single(
     s: &SvgfSettings,
 ) -> Result<FullscreenPass> {
     let run = signal(signal_name);
-    let one = Signal {
+    pass(b, run, "svgf_temporal.comp", &[lone(run, input, filtered)], Vec::new(), s, 0)
+}
+
+/// The temporal stage of what surfaces let through (`reflections::LET_THROUGH`, its
+/// distance in alpha), under the name `super::LET_THROUGH`; `filtered`, the chain's first
+/// a-trous output.
+pub fn let_through(b: &PassBuilder, filtered: Output, s: &SvgfSettings) -> Result<FullscreenPass> {
+    let run = signal(super::LET_THROUGH);
+    let one = lone(run, reflections::LET_THROUGH.into(), filtered);
+    let extra = vec![Input::texel(gbuffer::METAL_ROUGH)];
+    pass(b, run, "svgf_temporal_let_through.comp", &[one], extra, s, 0)
+}
+
+/// A lone signal's images in the temporal stage `run`.
+fn lone(run: Instance, input: Resource, filtered: Output) -> Signal {
+    Signal {
         input: Input::texel(input).bound_as("in_signal"),
         filtered,
         outputs: [COLOR.of(run), MOMENTS.of(run)],
         clamped: CLAMPED.of(run),
-    };
-    pass(b, run, "svgf_temporal.comp", &[one], Vec::new(), s, 0)
+    }
 }
 
 /// The temporal stage of the frame's `diffuse` and `specular` signals; `filtered`, the
