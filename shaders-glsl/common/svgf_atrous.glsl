@@ -102,8 +102,10 @@ void main() {
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) footprint[s] = s == SIGNALS - 1 ? centre.y : 1.0;
     // Iterations after the first (which feeds the history) leave converged signals as they are
     // (flagged by the iteration before): no footprint keeps the centre alone. Without any
-    // signal left to filter, no taps at all.
-    bool filtered = false;
+    // signal left to filter, no taps at all; but at step 1 the taps are loaded anyway, for the
+    // shares of the give-back (a signal without footprint, smooth glass's let-through light,
+    // lost what the clamp took: 2.5% of a reflecting pane's light).
+    bool filtered = svgf.step == 1;
     [[unroll]] for (int s = 0; s < SIGNALS; ++s) {
         if (svgf.step > 1 && svgf_flagged(texel_p[s])) footprint[s] = 0.0;
         filtered = filtered || footprint[s] > 0.0;

@@ -103,6 +103,7 @@ pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
     ("blend pan", blend_pan),
     ("slab pan", slab_pan),
     ("rough glass pan", rough_glass_pan),
+    ("reflecting glass pan", reflecting_glass_pan),
     ("moving object", moving_object),
     ("morphing object", morphing_object),
     ("moving light", moving_light),
@@ -377,6 +378,16 @@ pub fn slab_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
 pub fn rough_glass_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     let bounds = if denoised { [0.13, 0.16] } else { [0.8, 0.8] };
     truck_past(rig, denoised, scenes::rough_glass(), glass_facts::PANE_INSTANCE, PANE_METRICS, bounds, 64)
+}
+
+/// **Reflecting glass pan**: as the glass pan, past a pane turned 60 degrees in
+/// `stability-glass-reflect`, which reflects a brightly lit side wall while the wall behind
+/// shows through it: a third of its pixels' light moves with the reflected wall's virtual
+/// image, the rest with the wall behind. Both are sampled from two suns: the truth is the mean
+/// of 64 raw frames.
+pub fn reflecting_glass_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    let bounds = if denoised { [0.25, 0.25] } else { [0.6, 0.6] };
+    truck_past(rig, denoised, scenes::glass_reflect(), glass_facts::PANE_INSTANCE, PANE_METRICS, bounds, 64)
 }
 
 const FLOOR_METRICS: [&str; 2] = ["before the pan: floor rel. error", "during the pan: floor rel. error"];

@@ -18,6 +18,7 @@
 //! | `stability-blend` | the same past a blended (alpha 0.3) pane |
 //! | `stability-slab` | the same past a slab of glass (a volume) |
 //! | `stability-rough-glass` | the same past a rough glass pane (roughness 0.3) |
+//! | `stability-glass-reflect` | the same past a turned pane that also reflects a brighter wall |
 
 use super::animation::{Channel, Interpolation, Property};
 use super::builtin::{cuboid, node, quad, uv_sphere};
@@ -41,6 +42,7 @@ pub const NAMES: &[&str] = &[
     "stability-blend",
     "stability-slab",
     "stability-rough-glass",
+    "stability-glass-reflect",
 ];
 
 /// The scene called `name`, if it is one of [`NAMES`].
@@ -61,6 +63,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-blend" => Some(blend()),
         "stability-slab" => Some(slab()),
         "stability-rough-glass" => Some(rough_glass()),
+        "stability-glass-reflect" => Some(glass_reflect()),
         _ => None,
     }
 }
@@ -611,8 +614,8 @@ fn sunlit_truck(s: &mut Scene, from: Vec3, towards: Vec3) {
     });
 }
 
-/// Names and numbers of `stability-glass`, `stability-blend`, `stability-slab` and
-/// `stability-rough-glass` the scenarios use.
+/// Names and numbers of `stability-glass`, `stability-blend`, `stability-slab`,
+/// `stability-rough-glass` and `stability-glass-reflect` the scenarios use.
 pub mod glass_facts {
     /// The pane's instance (after the wall's).
     pub const PANE_INSTANCE: u32 = 1;
@@ -648,6 +651,29 @@ pub fn rough_glass() -> Scene {
         ..Default::default()
     };
     pane_before_wall("builtin:stability-rough-glass", pane, thin_pane())
+}
+
+/// As `stability-glass`, the pane (IOR 2, 3 x 1.5) turned 60 degrees about the vertical, so
+/// that it reflects a side wall which a second sun lights four times as brightly: a third to
+/// a half of what its pixels show is that reflection, the rest the wall behind. The two move
+/// differently as the camera moves: one history cannot follow both.
+pub fn glass_reflect() -> Scene {
+    let pane = Material {
+        name: "glass".into(),
+        base_color_factor: Vec4::ONE,
+        metallic_factor: 0.0,
+        roughness_factor: 0.0,
+        transmission: 1.0,
+        ior: 2.0,
+        ..Default::default()
+    };
+    let turned = Vec3::new(0.5, 0.0, -0.75f32.sqrt()) * 3.0;
+    let mut s = pane_before_wall("builtin:stability-glass-reflect", pane, quad(Vec3::ZERO, turned, Vec3::Y * 1.5, 1));
+    add(&mut s, "side wall", quad(Vec3::new(3.0, 2.0, -1.0), Vec3::Z * 10.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
+    let side_sun = s.nodes.len() as u32;
+    s.nodes.push(looking("side sun", Vec3::ZERO, Vec3::new(1.0, -0.3, -0.2)));
+    s.lights.push(light("side sun", LightKind::Directional, 12.0, side_sun));
+    s
 }
 
 /// As `stability-glass`, with a rough blended pane (alpha 0.3) in the glass's place: 70% of
