@@ -10,7 +10,9 @@
 // fetched where the reflected object was (common/reflection_motion.glsl), as the specular
 // chain's SVGF history is, and on glass or a blended surface where what they let through
 // carries most of the colour (reflections.let_through, seen along the view ray), where that
-// was, for its share of the colour; the disocclusion test still asks about the surface. Where the light changed, the history is dropped: where the
+// was; the disocclusion test still asks about the surface. What glass shows at no distance
+// along the view ray (a lens's turned image) no reprojection follows: while the image moves,
+// its share of the colour is taken from this frame. Where the light changed, the history is dropped: where the
 // frame says its lights changed and the neighbourhood's mean moved away from the history, and
 // where a radiance cache cell restarted or the pixel's resampled light went into shadow (an
 // occluder the frame was not told of); else the clamp box of a noisy neighbourhood lets the old
@@ -50,6 +52,9 @@ layout(set = 1, binding = 11, rgba32f) uniform writeonly image2D out_color;
 // renderer shrinks the jitter by as much as the camera's motion raises the blend
 // (src/passes/taa.rs `jitter_scale`).
 #define FAST_BLEND 1.0
+// What no reprojection can follow (a lens's image) is taken from this frame alone from this
+// much image motion, pixels a frame, on.
+#define UNANCHORED_MOTION 0.5
 // On a change of the lights the history is dropped where this frame's 3x3 mean differs from it
 // by more than this share of the larger of the two.
 #define LIGHTS_CHANGED_SHARE 0.1
@@ -124,10 +129,15 @@ void main() {
     // glass's).
     float hit = imageLoad(in_hit_distance, px).r;
     float mirror = max(metal_rough.x, metal_rough.w * (1.0 - metal_rough.x)) * reflection_motion_weight(metal_rough.y);
+    // The share of the colour that nothing can reproject: what a lens shows, turned, or the
+    // sky through glass; where the image moves it is taken from this frame.
+    float unanchored = 0.0;
     if (taa.let_through != 0u) {
         vec4 through = imageLoad(in_let_through, px);
-        float share = through.a > 0.0 ? clamp(luminance(through.rgb) / max(luminance(cur), 1e-6), 0.0, 1.0) : 0.0;
-        if (share >= 0.5) {
+        float share = clamp(luminance(through.rgb) / max(luminance(cur), 1e-6), 0.0, 1.0);
+        if (through.a == 0.0) {
+            unanchored = share;
+        } else if (share >= 0.5) {
             hit = through.a;
             mirror = 1.0;
         }
@@ -158,6 +168,7 @@ void main() {
         vec3 hist = to_ycocg(hist_rgb);
         vec2 moved = vec2(px) + 0.5 - prev_pos;
         float blend = mix(taa.blend, FAST_BLEND, clamp(length(moved) / taa.fast_motion, 0.0, 1.0));
+        blend = mix(blend, FAST_BLEND, unanchored * clamp(length(moved) / UNANCHORED_MOTION, 0.0, 1.0));
         result = mix(from_ycocg(clamp(hist, lo, hi)), cur, blend);
     }
     imageStore(out_color, px, vec4(result, 1.0));

@@ -377,6 +377,9 @@ float same_surface_neighbours(ivec2 px) {
 // smears the reflection once the camera moves: the stability suite's mirror pan measured 0.199
 // with a cap of 8, 0.145 with 2 and 0.132 with 1, its still frame 0.065, 0.063 and 0.063.
 const float GLOSSY_HISTORY_CAP = 2.0;
+// SVGF_LET_THROUGH: image motion, pixels a frame, from which what shows through at no
+// distance keeps no history (taa.comp's UNANCHORED_MOTION).
+const float UNANCHORED_MOTION = 0.5;
 const float GLOSSY_CAP_ROUGHNESS = 0.5;
 
 // The bilinear weights of the previous frame's four texels around `prev_pos` (continuous pixel
@@ -455,15 +458,22 @@ void main() {
         // out of a slab the way it went in: on the view ray's line `seen_at` beyond the surface,
         // which moves with that point's parallax, as a mirror's virtual point does.
         float seen_at = imageLoad(in_signal, px).a;
+        // What shows through at no distance (a lens's turned image, the sky through glass) has
+        // no history that a moving image can follow: none from UNANCHORED_MOTION on. (A path
+        // that brought nothing, rough glass's sample below the horizon, says nothing.)
+        float unanchored = 0.0;
         if (seen_at > 0.0) {
             prev_pos[0] = reflection_prev_pos(px, z, seen_at);
             fw_tolerance[0] = fw * (1.0 + distance(prev_pos[0], surface_pos));
+        } else if (luminance(c[0]) > 0.0) {
+            unanchored = clamp(length(vec2(px) + 0.5 - surface_pos) / UNANCHORED_MOTION, 0.0, 1.0);
         }
         // As sharp as the glass's lobe leaves it; a blended surface, however rough, lets it
         // through unaltered.
         bool blended = (materials[imageLoad(g_ids, px).y].flags & MATERIAL_BLEND) != 0u;
         float roughness = blended ? 0.0 : imageLoad(g_metal_rough, px).y;
         cap[0] = mix(GLOSSY_HISTORY_CAP, svgf.history_cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
+        cap[0] = mix(cap[0], 1.0, unanchored);
         footprint[0] = svgf_footprint(roughness);
     }
 #endif

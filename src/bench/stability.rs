@@ -104,6 +104,7 @@ pub const SCENARIOS: &[(&str, ScenarioFn)] = &[
     ("slab pan", slab_pan),
     ("rough glass pan", rough_glass_pan),
     ("reflecting glass pan", reflecting_glass_pan),
+    ("lens pan", lens_pan),
     ("moving object", moving_object),
     ("morphing object", morphing_object),
     ("moving light", moving_light),
@@ -388,6 +389,15 @@ pub fn rough_glass_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
 pub fn reflecting_glass_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
     let bounds = if denoised { [0.25, 0.25] } else { [0.6, 0.6] };
     truck_past(rig, denoised, scenes::glass_reflect(), glass_facts::PANE_INSTANCE, PANE_METRICS, bounds, 64)
+}
+
+/// **Lens pan**: as the glass pan, past a ball of glass in `stability-lens`, which shows the
+/// wall behind it turned: no distance along the view ray says where that was last frame, so
+/// while the image moves neither SVGF nor TAA keeps a history of it. The truth is the mean of
+/// 64 raw frames.
+pub fn lens_pan(rig: &Rig, denoised: bool) -> Result<Vec<Measure>> {
+    let bounds = if denoised { [0.2, 0.26] } else { [0.2, 0.2] };
+    truck_past(rig, denoised, scenes::lens(), glass_facts::PANE_INSTANCE, PANE_METRICS, bounds, 64)
 }
 
 const FLOOR_METRICS: [&str; 2] = ["before the pan: floor rel. error", "during the pan: floor rel. error"];

@@ -19,6 +19,7 @@
 //! | `stability-slab` | the same past a slab of glass (a volume) |
 //! | `stability-rough-glass` | the same past a rough glass pane (roughness 0.3) |
 //! | `stability-glass-reflect` | the same past a turned pane that also reflects a brighter wall |
+//! | `stability-lens` | the same past a ball of glass, which turns what shows through it |
 
 use super::animation::{Channel, Interpolation, Property};
 use super::builtin::{cuboid, node, quad, uv_sphere};
@@ -43,6 +44,7 @@ pub const NAMES: &[&str] = &[
     "stability-slab",
     "stability-rough-glass",
     "stability-glass-reflect",
+    "stability-lens",
 ];
 
 /// The scene called `name`, if it is one of [`NAMES`].
@@ -64,6 +66,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "stability-slab" => Some(slab()),
         "stability-rough-glass" => Some(rough_glass()),
         "stability-glass-reflect" => Some(glass_reflect()),
+        "stability-lens" => Some(lens()),
         _ => None,
     }
 }
@@ -615,7 +618,7 @@ fn sunlit_truck(s: &mut Scene, from: Vec3, towards: Vec3) {
 }
 
 /// Names and numbers of `stability-glass`, `stability-blend`, `stability-slab`,
-/// `stability-rough-glass` and `stability-glass-reflect` the scenarios use.
+/// `stability-rough-glass`, `stability-glass-reflect` and `stability-lens` the scenarios use.
 pub mod glass_facts {
     /// The pane's instance (after the wall's).
     pub const PANE_INSTANCE: u32 = 1;
@@ -674,6 +677,23 @@ pub fn glass_reflect() -> Scene {
     s.nodes.push(looking("side sun", Vec3::ZERO, Vec3::new(1.0, -0.3, -0.2)));
     s.lights.push(light("side sun", LightKind::Directional, 12.0, side_sun));
     s
+}
+
+/// As `stability-glass`, with a ball of glass (radius 0.6, IOR 1.5, a volume) in the pane's
+/// place: a lens, which shows the wall behind it turned upside down and moving against the
+/// camera's motion, where no distance along the view ray says where it was last frame.
+pub fn lens() -> Scene {
+    let ball = Material {
+        name: "lens".into(),
+        base_color_factor: Vec4::ONE,
+        metallic_factor: 0.0,
+        roughness_factor: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        thickness: 1.2,
+        ..Default::default()
+    };
+    pane_before_wall("builtin:stability-lens", ball, uv_sphere(0.6, 48, 24, 1))
 }
 
 /// As `stability-glass`, with a rough blended pane (alpha 0.3) in the glass's place: 70% of
