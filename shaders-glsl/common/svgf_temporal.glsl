@@ -469,12 +469,14 @@ void main() {
             unanchored = clamp(length(vec2(px) + 0.5 - surface_pos) / UNANCHORED_MOTION, 0.0, 1.0);
         }
         // As sharp as the glass's lobe leaves it; a blended surface, however rough, lets it
-        // through unaltered.
+        // through unaltered. An opaque surface lets nothing through: nothing to filter there,
+        // and the a-trous iterations after the first skip it.
         bool blended = (materials[imageLoad(g_ids, px).y].flags & MATERIAL_BLEND) != 0u;
-        float roughness = blended ? 0.0 : imageLoad(g_metal_rough, px).y;
+        vec4 mr = imageLoad(g_metal_rough, px);
+        float roughness = blended ? 0.0 : mr.y;
         cap[0] = mix(GLOSSY_HISTORY_CAP, svgf.history_cap, smoothstep(0.0, GLOSSY_CAP_ROUGHNESS, roughness));
         cap[0] = mix(cap[0], 1.0, unanchored);
-        footprint[0] = svgf_footprint(roughness);
+        footprint[0] = blended || mr.w * (1.0 - mr.x) > 0.0 ? svgf_footprint(roughness) : 0.0;
     }
 #endif
     // A camera cut, or lights that changed since last frame: the history holds light that is
