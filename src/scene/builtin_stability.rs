@@ -631,28 +631,14 @@ pub mod glass_facts {
 /// what the pane shows (the wall, seen through it) crosses the screen at the wall's speed, not
 /// the pane's.
 pub fn glass() -> Scene {
-    let pane = Material {
-        name: "glass".into(),
-        base_color_factor: Vec4::ONE,
-        metallic_factor: 0.0,
-        roughness_factor: 0.0,
-        transmission: 1.0,
-        ..Default::default()
-    };
+    let pane = clear_glass("glass", 0.0, 1.5, 0.0);
     pane_before_wall("builtin:stability-glass", pane, thin_pane())
 }
 
 /// As `stability-glass`, the pane rough (0.3): what it lets through is a blurred, noisy image
 /// of the wall, which the denoiser must average without smearing it as the camera moves.
 pub fn rough_glass() -> Scene {
-    let pane = Material {
-        name: "frosted".into(),
-        base_color_factor: Vec4::ONE,
-        metallic_factor: 0.0,
-        roughness_factor: 0.3,
-        transmission: 1.0,
-        ..Default::default()
-    };
+    let pane = clear_glass("frosted", 0.3, 1.5, 0.0);
     pane_before_wall("builtin:stability-rough-glass", pane, thin_pane())
 }
 
@@ -661,15 +647,7 @@ pub fn rough_glass() -> Scene {
 /// a half of what its pixels show is that reflection, the rest the wall behind. The two move
 /// differently as the camera moves: one history cannot follow both.
 pub fn glass_reflect() -> Scene {
-    let pane = Material {
-        name: "glass".into(),
-        base_color_factor: Vec4::ONE,
-        metallic_factor: 0.0,
-        roughness_factor: 0.0,
-        transmission: 1.0,
-        ior: 2.0,
-        ..Default::default()
-    };
+    let pane = clear_glass("glass", 0.0, 2.0, 0.0);
     let turned = Vec3::new(0.5, 0.0, -0.75f32.sqrt()) * 3.0;
     let mut s = pane_before_wall("builtin:stability-glass-reflect", pane, quad(Vec3::ZERO, turned, Vec3::Y * 1.5, 1));
     add(&mut s, "side wall", quad(Vec3::new(3.0, 2.0, -1.0), Vec3::Z * 10.0, Vec3::Y * 6.0, 0), Vec3::ZERO);
@@ -683,16 +661,7 @@ pub fn glass_reflect() -> Scene {
 /// place: a lens, which shows the wall behind it turned upside down and moving against the
 /// camera's motion, where no distance along the view ray says where it was last frame.
 pub fn lens() -> Scene {
-    let ball = Material {
-        name: "lens".into(),
-        base_color_factor: Vec4::ONE,
-        metallic_factor: 0.0,
-        roughness_factor: 0.0,
-        transmission: 1.0,
-        ior: 1.5,
-        thickness: 1.2,
-        ..Default::default()
-    };
+    let ball = clear_glass("lens", 0.0, 1.5, 1.2);
     pane_before_wall("builtin:stability-lens", ball, uv_sphere(0.6, 48, 24, 1))
 }
 
@@ -713,17 +682,23 @@ pub fn blend() -> Scene {
 /// As `stability-glass`, with a slab of glass 0.2 thick (a volume, IOR 1.5) in the pane's
 /// place: the wall seen through it is refracted twice, shifted sideways but not turned.
 pub fn slab() -> Scene {
-    let pane = Material {
-        name: "slab".into(),
+    let pane = clear_glass("slab", 0.0, 1.5, 0.2);
+    pane_before_wall("builtin:stability-slab", pane, cuboid(Vec3::new(1.0, 0.75, 0.1), 1))
+}
+
+/// The glass scenes' material: clear (transmission 1, white), `roughness`, `ior`, `thickness`
+/// (0: thin-walled, else a volume).
+fn clear_glass(name: &str, roughness: f32, ior: f32, thickness: f32) -> Material {
+    Material {
+        name: name.into(),
         base_color_factor: Vec4::ONE,
         metallic_factor: 0.0,
-        roughness_factor: 0.0,
+        roughness_factor: roughness,
         transmission: 1.0,
-        ior: 1.5,
-        thickness: 0.2,
+        ior,
+        thickness,
         ..Default::default()
-    };
-    pane_before_wall("builtin:stability-slab", pane, cuboid(Vec3::new(1.0, 0.75, 0.1), 1))
+    }
 }
 
 /// The glass and blend scenes' pane: 2 x 1.5, facing the camera.
