@@ -271,7 +271,7 @@ impl LightTables {
     /// Takes over what `old` knew of the deformed emissive meshes' shapes (the deformer and
     /// the skinning report a shape only when it changes), and builds the emitters from them at
     /// the next `update`: tables made again for another shadows chain
-    /// (`SceneGpu::set_chain`).
+    /// (`SceneGpu::set_light_tables`).
     pub fn inherit_shapes(&mut self, old: LightTables) {
         self.shapes = old.shapes;
         self.built_for = None;
