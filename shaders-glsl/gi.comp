@@ -142,13 +142,17 @@ vec2 shade(ivec2 px) {
 
     // Direct light. Sampled from the shadow ray's own origin: direction and distance measured
     // from the surface point would overshoot by the offset, and the shadow ray would hit the
-    // emitter it aims at. Three shadow rays at most, from one call site (the compute backend
-    // inlines its traversal at every call, and each copy lengthens a CPU driver's compile; an
-    // unrolled loop would copy it again):
+    // emitter it aims at. Three shadow rays at most, then the bounce, from one call site (the
+    // compute backend inlines its traversal at every call, and each copy lengthens a CPU
+    // driver's compile; an unrolled loop would copy it again):
     //   0: a sample of the environment alone (the other lights are composite's or the
     //      reservoir's);
     //   1: the frame's resampled-light candidate, tested before it is merged;
-    //   2: last frame's resampled light, re-tested where it wins the merge.
+    //   2: last frame's resampled light, re-tested where it wins the merge;
+    //   3: the bounce, cosine-weighted about the shading normal, kept above the geometric
+    //      surface (nothing to gather for a smooth metal, which is here only for the resampled
+    //      lights), straight on through see-through surfaces as the shadow rays go (each one
+    //      it passes sends it round again).
     ShadingPoint sp = ShadingPoint(origin, n, ng, v, m, rough);
     LightReservoir r = reservoir_empty();
     LightReservoir prev = reservoir_empty();
@@ -160,34 +164,68 @@ vec2 shade(ivec2 px) {
     vec2 lost = vec2(0.0);          // gi.light_lost
     // Whether the environment sends light (else nothing to draw toward it).
     bool env_lit = light_table.entry_count > 0u && light_entries[light_table.env_entry].pmf > 0.0;
-    [[dont_unroll]] for (uint k = 0u; k < 3u; ++k) {
-        NeeSample ls;
-        if (k == 0u) {
-            // The numbers are drawn either way, so scenes without an environment keep their streams.
-            vec3 u = rng_next3(rng);
-            if (!env_lit) continue;
-            ls = sample_environment(u.yz, 1.0);
-            if (!(ls.pdf > 0.0)) continue;
-        } else if (k == 1u) {
-            if (!(r.w_sum > 0.0)) continue;
-            ls = reservoir_light_sample(sp, r.light, r.u, true);
+    vec3 dir = vec3(0.0);           // the bounce's direction
+    float pdf = 0.0;                // and its density
+    vec3 from = origin;             // where its next segment starts
+    vec3 through = vec3(1.0);       // what the surfaces it passed let through
+    uint crossed = 0u;
+    Hit bounce_hit;                 // where it stopped (NO_HIT: escaped, or not traced)
+    bounce_hit.instance = NO_HIT;
+    HitSurface s;
+    [[dont_unroll]] for (uint k = 0u; k < 4u; ++k) {
+        NeeSample ls = nee_none();
+        float cos_l = 0.0;
+        bool traced = true;
+        vec3 o = from, d = dir;
+        float tmax = 1e6;
+        if (k == 3u) {
+            if (crossed == 0u) {
+                d = dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
+                pdf = max(dot(n, dir), 0.0) * INV_PI;
+                if (!((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0)) break;
+            }
         } else {
-            // (Without resampled lights no random number is drawn here, so those scenes keep the
-            // random streams, and so the images, they had before the reservoirs.)
-            if (!resampled) break;
-            // An occluded candidate of this frame has weight 0 here, only its count.
-            if (!reservoir_merge(r, prev.light, prev.u, prev.w_sum, prev.p_hat, prev.m, rng_next(rng))) break;
-            ls = reservoir_light_sample(sp, r.light, r.u, true);
+            if (k == 0u) {
+                // The numbers are drawn either way, so scenes without an environment keep their
+                // streams.
+                vec3 u = rng_next3(rng);
+                if (!env_lit) continue;
+                ls = sample_environment(u.yz, 1.0);
+                if (!(ls.pdf > 0.0)) continue;
+            } else if (k == 1u) {
+                if (!(r.w_sum > 0.0)) continue;
+                ls = reservoir_light_sample(sp, r.light, r.u, true);
+            } else {
+                // (Without resampled lights no random number is drawn here, so those scenes keep
+                // the random streams, and so the images, they had before the reservoirs.)
+                if (!resampled) continue;
+                // An occluded candidate of this frame has weight 0 here, only its count.
+                if (!reservoir_merge(r, prev.light, prev.u, prev.w_sum, prev.p_hat, prev.m, rng_next(rng))) continue;
+                ls = reservoir_light_sample(sp, r.light, r.u, true);
+            }
+            cos_l = max(dot(n, ls.dir), 0.0);
+            traced = dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0;
+            o = origin;
+            d = ls.dir;
+            tmax = shadow_ray_tmax(ls.dist);
         }
-        float cos_l = max(dot(n, ls.dir), 0.0);
+        Hit h;
+        h.instance = NO_HIT;
+        if (traced) h = trace_ray(o, d, 0.0, tmax, RAY_MASK_ALL, k < 3u);
+        if (k == 3u) {
+            bounce_hit = h;
+            if (h.instance == NO_HIT) break;
+            s = hit_surface(h.instance, h.primitive, h.bary, dir);
+            if (crossed < PASS_THROUGH_MAX && pass_through(s, dir, through, rng)) {
+                ++crossed;
+                from = offset_ray(s.position, -s.normal_geo);
+                --k;  // the loop's increment brings it back to the bounce
+            }
+            continue;
+        }
         // What passes the see-through surfaces on the way scales the sample.
-        bool traced = dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) > 0.0 && cos_l > 0.0;
         vec3 unshadowed = ls.weight;
-        if (traced) {
-            ls.weight *= trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
-        } else {
-            ls.weight = vec3(0.0);
-        }
+        ls.weight = traced && h.instance == NO_HIT ? ls.weight * hit_transmittance : vec3(0.0);
         bool visible = dot(ls.weight, ls.weight) > 0.0;
         if (k > 0u && traced) {
             if (reservoir_punctual(r.light)) light_grid_learn(origin, r.light, visible);
@@ -225,31 +263,22 @@ vec2 shade(ivec2 px) {
         imageStore(out_reservoir, px, reservoir_pack(r));
     }
 
-    // The bounce: cosine-weighted about the shading normal, kept above the geometric surface
-    // (nothing to gather for a smooth metal, which is here only for the resampled lights).
-    vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
-    float pdf = max(dot(n, dir), 0.0) * INV_PI;
-    if ((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0) {
+    if (pdf > 0.0 && dot(dir, ng) > 0.0 && (diffuse || rough)) {
         vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
-        // Straight on through see-through surfaces, as the light sample's shadow ray goes.
-        vec3 through = vec3(1.0);
-        HitSurface s;
-        float travelled;
-        Hit h = trace_closest_through(origin, dir, through, rng, s, travelled);
         // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
-        if (h.instance == NO_HIT) {
+        if (bounce_hit.instance == NO_HIT) {
             bounce = env_eval(dir) * (env_lit ? mis_power(pdf, env_pdf(dir)) : 1.0);
         } else {
             // An emitter the reservoirs can draw is theirs; one they cannot (no power in the
             // table) only this ray finds.
-            if (emitter_visible_side(h.instance, h.primitive, dir) &&
-                !(light_pdf_emitter(h.instance, h.primitive, origin, s.position) > 0.0)) {
+            if (emitter_visible_side(bounce_hit.instance, bounce_hit.primitive, dir) &&
+                !(light_pdf_emitter(bounce_hit.instance, bounce_hit.primitive, origin, s.position) > 0.0)) {
                 bounce += s.mat.emissive;
             }
             uint traced = max(params.bounces, 1u);
             uint vertices = rc.enabled != 0u ? max(traced, RC_VERTICES) : traced;
-            bounce += rc_radiance_leaving(s, dir, h.t, traced - 1u, vertices, true,
+            bounce += rc_radiance_leaving(s, dir, bounce_hit.t, traced - 1u, vertices, true,
                                           rc_copy_written(frame.frame_index), rng);
         }
         bounce *= through;

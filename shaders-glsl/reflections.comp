@@ -12,9 +12,15 @@
 // resampled punctual lights, which no ray can hit, and is added. The output is the lobe's
 // contribution (Fresnel and shadowing included), ready to add; the hit distance goes alongside
 // for the denoiser. What transmissive and blended surfaces let through (one path through the
-// glass, transmitted_radiance; the view ray continued past a blend, behind_blend) is a signal
-// of its own, out_let_through, with where it was seen: its history follows that, the
-// reflection's its own hit, and each has its denoiser.
+// glass, as the reference traces it; the view ray continued past a blend) is a signal of its
+// own, out_let_through, with where it was seen: its history follows that, the reflection's its
+// own hit, and each has its denoiser. A reflection ray that meets a volume of glass goes on
+// through it too (a glass ball seen in a mirror).
+//
+// Every ray of the pixel goes through one trace_ray call and every hit it shades through one
+// shade_hit call, in one loop over the pixel's jobs: lavapipe inlines a whole traversal (and
+// shade_hit's path through the radiance cache) at each call site, and with the eight sites
+// this pass had, its first compile on a cold shader cache took minutes.
 #extension GL_GOOGLE_include_directive : require
 #include "common/trace.glsl"
 #include "common/brdf.glsl"
@@ -66,226 +72,295 @@ vec3 shade_hit(Hit h, HitSurface s, vec3 dir, float emission_weight, inout Rng r
     return radiance + rc_radiance_leaving(s, dir, h.t, 0u, vertices, true, rc_copy_written(frame.frame_index), rng);
 }
 
-// Light through a transmissive surface toward v (KHR_materials_transmission): one path through
-// it, as the reference traces it (common/transmission.glsl), shaded where it leaves the glass,
-// and for thin-walled glass a light sample through it.
-// Inside a volume the interface reflects or lets the path out (Beer-Lambert absorbing on the
-// way); a further transmissive surface adds what it reflects and is passed through. The weight
-// excludes the surface's transmitted share, which the caller applies.
-// `seen_at`: how far the path went before it stopped at an opaque surface, where what it saw
-// lies (near enough) on the view ray's line: through thin-walled glass, which does not bend a
-// ray, or out of a volume in the direction it went in (a slab shifts the line a little and
-// does not turn it). The denoiser and TAA reproject what the glass lets through by it. 0 where
-// the path escaped, or left a volume turned (a lens: what it shows moves its own way).
+// Most events on a path through glass (refractions, reflections inside a volume, glass passed).
 #define TRANSMISSION_EVENTS 8u
 // A path leaving a volume within about 2.5 degrees of the view ray counts as not turned.
 #define UNTURNED_COS 0.999
 // Up to this many punctual lights, each is sampled through thin-walled glass.
 #define GLASS_LIGHTS 8u
-vec3 transmitted_radiance(vec3 p, vec3 n, vec3 ng, vec3 v, float depth, BrdfInput m, MaterialInfo mi, inout Rng rng,
-                          out float seen_at) {
-    seen_at = 0.0;
-    m.dielectric_f0 = dielectric_f0(mi.ior);
-    bool thin = mi.thickness <= 0.0;
-    TransmissionSample ts = transmission_sample(m, thin, mi.ior, n, v, rng_next2(rng));
-    vec3 weight = ts.weight;
-    vec3 origin = offset_ray_origin(p, -ng, depth);
-    vec3 dir = ts.l;
-    vec3 absorption = thin ? vec3(0.0) : volume_absorption(mi);
-    vec3 emitted = vec3(0.0);  // by the glass surfaces passed on the way
-    // Punctual lights behind thin-walled glass, through its transmitted lobe (the bulb in a glass
-    // shade): no ray can hit one, so light samples are the only way to them. Each of a few
-    // lights is sampled (a light chosen by power would rarely be the bulb close behind the
-    // glass, and then with a weight the denoiser clamps); of more, one chosen by power. Other
-    // lights are reached by the path below.
-    bool every_light = frame.light_count <= GLASS_LIGHTS;
-    uint samples = thin ? (every_light ? frame.light_count : 1u) : 0u;
-    [[dont_unroll]] for (uint k = 0u; k < samples; ++k) {
-        NeeSample ls = every_light ? sample_punctual_light(k, p, rng_next2(rng), 1.0) : light_sample(p, rng_next3(rng));
-        if (ls.pdf == 0.0 && dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, ng) < 0.0) {
-            vec3 f = thin_transmission_eval_cos(m, n, v, ls.dir);
-            if (dot(f, f) > 0.0) {
-                emitted += f * ls.weight * trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
-            }
-        }
-    }
-    if (dot(weight, weight) <= 0.0) return emitted;
-    float travelled = 0.0;  // the path's length from p
-    for (uint event = 0u; event < TRANSMISSION_EVENTS; ++event) {
-        Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
-        if (h.instance == NO_HIT) return emitted + weight * env_eval(dir);
-        travelled += h.t;
-        if (any(greaterThan(absorption, vec3(0.0)))) weight *= exp(-absorption * h.t);
-        HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
-        MaterialInfo hm = materials[s.material];
-        float through = s.mat.transmission * (1.0 - s.mat.metallic);
-        // What the surface sends back along the path: all it reflects, glass included (the
-        // light glass does not let through; the path goes on with what it does). A volume's
-        // inner side reflects by the interface sample below instead.
-        bool inner_side = hm.thickness > 0.0 && !s.front;
-        if (through <= 0.0 || !inner_side) {
-            emitted += weight * shade_hit(h, s, dir, 1.0, rng);
-        } else if (emitter_visible_side(h.instance, h.primitive, dir)) {
-            emitted += weight * s.mat.emissive;
-        }
-        if (through <= 0.0) {
-            seen_at = thin || dot(dir, -v) > UNTURNED_COS ? travelled : 0.0;
-            return emitted;
-        }
-        BrdfInput hm_brdf = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
-        TransmissionSample next;
-        if (inner_side) {
-            next = interface_sample(s.mat.roughness, hm.ior, s.normal, -dir, rng_next3(rng));
-            if (next.crossed) absorption = vec3(0.0);
-        } else {
-            next = transmission_sample(hm_brdf, hm.thickness <= 0.0, hm.ior, s.normal, -dir, rng_next2(rng));
-            next.weight *= through;
-            if (hm.thickness > 0.0) {
-                absorption = volume_absorption(hm);
-                thin = false;
-            }
-        }
-        weight *= next.weight;
-        if (dot(weight, weight) <= 0.0) return emitted;
-        origin = offset_ray(s.position, next.crossed ? -s.normal_geo : s.normal_geo);
-        dir = next.l;
-    }
-    return emitted;
+// Most blended surfaces the view ray is continued past.
+#define BLEND_LAYERS 4u
+
+// The pixel's surface, from the G-buffer.
+struct Pixel {
+    vec3 p;
+    vec3 n;
+    vec3 ng;
+    vec3 v;
+    float depth;
+    BrdfInput m;
+    float ior;
+    bool thin;          // thin-walled glass (no volume)
+    vec3 absorption;    // its volume's Beer-Lambert coefficient
+    float transmitted;  // the share of its light the glass lets through
+    float cover;        // the share a blended surface covers (1 for others)
+    vec3 origin;        // where reflection rays start
+    float area_share;   // the area lights' share of the light table (0: no area-light samples)
+};
+
+// What a ray is for, and so what its hit does.
+#define RAY_SHADOW 0u   // a light sample's shadow ray: adds `weight` times what passes
+#define RAY_GLASS 1u    // a path through glass: shades what it meets, passes transmissive surfaces
+#define RAY_BLEND 2u    // the view ray continued past blended surfaces, shaded where it stops
+#define RAY_REFLECT 3u  // a reflection ray, straight on through see-through surfaces (pass_through)
+
+// Where a ray's light goes.
+#define TO_GLASS 0u       // what the glass lets through
+#define TO_BEHIND 1u      // what shows past a blend
+#define TO_REFLECTION 2u  // the reflection (summed over its rays)
+
+struct Ray {
+    uint kind;
+    uint target;
+    vec3 origin;
+    vec3 dir;
+    float tmax;
+    vec3 weight;      // of the light the ray finds
+    float pdf;        // a reflection ray's solid-angle density, for MIS (0: a mirror's delta lobe)
+    uint steps;       // surfaces passed, or a glass path's events
+    float travelled;  // from where the job began
+    vec3 absorption;  // inside a volume: its Beer-Lambert coefficient
+    bool thin;        // a glass path that has entered no volume
+};
+
+Ray ray_new(uint kind, uint target, vec3 origin, vec3 dir, float tmax, vec3 weight) {
+    return Ray(kind, target, origin, dir, tmax, weight, 0.0, 0u, 0.0, vec3(0.0), true);
 }
 
-// What a blended surface lets through toward v: the view ray continued past it, through further
-// blended surfaces with the chance of their uncovered share, shaded where it stops, `seen_at`
-// beyond p (0 where the ray escaped).
-#define BLEND_LAYERS 4u
-vec3 behind_blend(vec3 p, vec3 ng, vec3 v, float depth, inout Rng rng, out float seen_at) {
-    seen_at = 0.0;
-    vec3 origin = offset_ray_origin(p, -ng, depth);
-    vec3 dir = -v;
-    float travelled = 0.0;
-    for (uint layer = 0u; layer < BLEND_LAYERS; ++layer) {
-        Hit h = trace_closest(origin, dir, 0.0, 1e6, RAY_MASK_ALL);
-        if (h.instance == NO_HIT) return env_eval(dir);
-        travelled += h.t;
-        HitSurface s = hit_surface(h.instance, h.primitive, h.bary, dir);
-        bool blended = (materials[s.material].flags & MATERIAL_BLEND) != 0u;
-        if (!blended || layer + 1u == BLEND_LAYERS || rng_next(rng) < s.mat.base_color.a) {
-            seen_at = travelled;
-            return shade_hit(h, s, dir, 1.0, rng);
-        }
-        origin = offset_ray(s.position, -s.normal_geo);
-    }
-    return vec3(0.0);
+// Light samples taken through thin-walled glass: punctual lights behind it (the bulb in a glass
+// shade) reach the path only so, as no ray can hit one. Each of a few lights is sampled (a light
+// chosen by power would rarely be the bulb close behind the glass, and then with a weight the
+// denoiser clamps); of more, one chosen by power. The path reaches other lights.
+uint glass_light_samples(Pixel px) {
+    if (px.transmitted <= 0.0 || !px.thin) return 0u;
+    return frame.light_count <= GLASS_LIGHTS ? frame.light_count : 1u;
+}
+
+// The path through the glass (common/transmission.glsl), weighted by the share it lets through.
+bool start_glass_path(Pixel px, inout Ray ray, inout Rng rng) {
+    TransmissionSample ts = transmission_sample(px.m, px.thin, px.ior, px.n, px.v, rng_next2(rng));
+    if (dot(ts.weight, ts.weight) <= 0.0) return false;
+    vec3 weight = px.cover * px.transmitted * ts.weight;
+    ray = ray_new(RAY_GLASS, TO_GLASS, offset_ray_origin(px.p, -px.ng, px.depth), ts.l, 1e6, weight);
+    ray.thin = px.thin;
+    ray.absorption = px.absorption;
+    return true;
+}
+
+// Light sample k through thin-walled glass (glass_light_samples).
+bool start_glass_light(Pixel px, uint k, inout Ray ray, inout Rng rng) {
+    NeeSample ls = frame.light_count <= GLASS_LIGHTS ? sample_punctual_light(k, px.p, rng_next2(rng), 1.0)
+                                                     : light_sample(px.p, rng_next3(rng));
+    if (!(ls.pdf == 0.0 && dot(ls.weight, ls.weight) > 0.0 && dot(ls.dir, px.ng) < 0.0)) return false;
+    vec3 f = thin_transmission_eval_cos(px.m, px.n, px.v, ls.dir);
+    if (dot(f, f) <= 0.0) return false;
+    vec3 origin = offset_ray_origin(px.p, -px.ng, px.depth);
+    ray = ray_new(RAY_SHADOW, TO_GLASS, origin, ls.dir, shadow_ray_tmax(ls.dist), px.cover * px.transmitted * f * ls.weight);
+    return true;
 }
 
 // The glossy lobe's light sample of the emitters and the environment (area_light_sample), with
 // a shadow ray that passes see-through surfaces, weighted against the lobe's own ray by the
 // power heuristic.
-vec3 area_light_estimate(vec3 origin, vec3 n, vec3 ng, vec3 v, BrdfInput m, float share, inout Rng rng) {
-    NeeSample ls = area_light_sample(origin, rng_next3(rng), share);
-    if (!(ls.pdf > 0.0) || dot(ls.dir, ng) <= 0.0) return vec3(0.0);
-    vec3 f = brdf_eval_specular_cos(m, n, v, ls.dir);
-    if (dot(f, f) <= 0.0) return vec3(0.0);
-    float pdf = ggx_vndf_pdf(max(dot(n, v), 1e-4), max(dot(n, normalize(v + ls.dir)), 0.0), ggx_alpha(m.roughness));
-    vec3 seen = trace_transmittance(origin, ls.dir, 0.0, shadow_ray_tmax(ls.dist), RAY_MASK_ALL);
-    return ls.weight * f * seen * mis_power(ls.pdf, pdf);
+bool start_area_light(Pixel px, inout Ray ray, inout Rng rng) {
+    NeeSample ls = area_light_sample(px.origin, rng_next3(rng), px.area_share);
+    if (!(ls.pdf > 0.0) || dot(ls.dir, px.ng) <= 0.0) return false;
+    vec3 f = brdf_eval_specular_cos(px.m, px.n, px.v, ls.dir);
+    if (dot(f, f) <= 0.0) return false;
+    float n_dot_v = max(dot(px.n, px.v), 1e-4);
+    float pdf = ggx_vndf_pdf(n_dot_v, max(dot(px.n, normalize(px.v + ls.dir)), 0.0), ggx_alpha(px.m.roughness));
+    ray = ray_new(RAY_SHADOW, TO_REFLECTION, px.origin, ls.dir, shadow_ray_tmax(ls.dist), ls.weight * f * mis_power(ls.pdf, pdf));
+    return true;
+}
+
+// A reflection ray: the mirror direction, or visible-normal sampling of the GGX lobe, whose
+// estimate f cos / pdf reduces to F(v.h) G2(v, l) / G1(v).
+bool start_reflection(Pixel px, inout Ray ray, inout Rng rng) {
+    float n_dot_v = max(dot(px.n, px.v), 1e-4);
+    vec3 l, weight;
+    float pdf = 0.0;
+    if (px.m.roughness < MIRROR_ROUGHNESS) {
+        l = reflect(-px.v, px.n);
+        weight = fresnel_schlick(brdf_f0(px.m), n_dot_v);
+    } else {
+        mat3 basis = orthonormal_basis(px.n);
+        vec3 v_local = vec3(dot(px.v, basis[0]), dot(px.v, basis[1]), n_dot_v);
+        float alpha = ggx_alpha(px.m.roughness);
+        vec3 h_local = sample_ggx_vndf(v_local, alpha, rng_next2(rng));
+        vec3 l_local = reflect(-v_local, h_local);
+        if (l_local.z <= 0.0) return false;
+        l = normalize(basis * l_local);
+        vec3 h = normalize(basis * h_local);
+        float n_dot_l = l_local.z;
+        float g2 = smith_visibility(n_dot_l, n_dot_v, alpha) * 4.0 * n_dot_l * n_dot_v;
+        weight = fresnel_schlick(brdf_f0(px.m), dot(px.v, h)) * g2 / ggx_g1(n_dot_v, alpha);
+        pdf = ggx_vndf_pdf(n_dot_v, h_local.z, alpha);
+    }
+    if (dot(l, px.ng) <= 0.0) return false;
+    ray = ray_new(RAY_REFLECT, TO_REFLECTION, px.origin, l, 1e6, weight);
+    ray.pdf = pdf;
+    return true;
+}
+
+// A glass path's next event at the transmissive surface s it met: from inside a volume the
+// interface reflects or lets it out; from outside it passes through (thin glass) or refracts
+// into the volume. False where the path ends.
+bool glass_event(inout Ray ray, HitSurface s, inout Rng rng) {
+    MaterialInfo hm = materials[s.material];
+    TransmissionSample next;
+    if (hm.thickness > 0.0 && !s.front) {
+        next = interface_sample(s.mat.roughness, hm.ior, s.normal, -ray.dir, rng_next3(rng));
+        if (next.crossed) ray.absorption = vec3(0.0);
+    } else {
+        BrdfInput m = BrdfInput(s.mat.base_color.rgb, s.mat.metallic, s.mat.roughness, dielectric_f0(hm.ior));
+        next = transmission_sample(m, hm.thickness <= 0.0, hm.ior, s.normal, -ray.dir, rng_next2(rng));
+        next.weight *= s.mat.transmission * (1.0 - s.mat.metallic);
+        if (hm.thickness > 0.0) {
+            ray.absorption = volume_absorption(hm);
+            ray.thin = false;
+        }
+    }
+    ray.kind = RAY_GLASS;
+    ray.weight *= next.weight;
+    ray.origin = offset_ray(s.position, next.crossed ? -s.normal_geo : s.normal_geo);
+    ray.dir = next.l;
+    return dot(ray.weight, ray.weight) > 0.0 && ++ray.steps < TRANSMISSION_EVENTS;
 }
 
 void main() {
-    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(px, ivec2(frame.size)))) return;
-    if (imageLoad(g_ids, px).x == NO_INSTANCE) {
-        imageStore(out_radiance, px, vec4(0.0));
-        imageStore(out_hit_distance, px, vec4(0.0));
-        if (params.let_through != 0u) imageStore(out_let_through, px, vec4(0.0));
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, ivec2(frame.size)))) return;
+    if (imageLoad(g_ids, pixel).x == NO_INSTANCE) {
+        imageStore(out_radiance, pixel, vec4(0.0));
+        imageStore(out_hit_distance, pixel, vec4(0.0));
+        if (params.let_through != 0u) imageStore(out_let_through, pixel, vec4(0.0));
         return;
     }
-    float depth = imageLoad(g_depth, px).r;
-    vec3 n = imageLoad(g_normal, px).xyz;
-    vec3 ng = imageLoad(g_normal_geo, px).xyz;
-    vec3 p = world_position(px, depth);
-    vec3 v = -camera_ray_dir(vec2(px) + 0.5 - frame.jitter);
-    vec4 mr = imageLoad(g_metal_rough, px);
-    MaterialInfo mi = materials[imageLoad(g_ids, px).y];
-    BrdfInput m = BrdfInput(imageLoad(g_base_color, px).rgb, mr.x, mr.y, dielectric_f0(mi.ior));
-    vec3 f0 = brdf_f0(m);
-    float n_dot_v = max(dot(n, v), 1e-4);
-    Rng rng = rng_init(uvec2(px), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
-
+    Pixel px;
+    px.depth = imageLoad(g_depth, pixel).r;
+    px.n = imageLoad(g_normal, pixel).xyz;
+    px.ng = imageLoad(g_normal_geo, pixel).xyz;
+    px.p = world_position(pixel, px.depth);
+    px.v = -camera_ray_dir(vec2(pixel) + 0.5 - frame.jitter);
+    vec4 mr = imageLoad(g_metal_rough, pixel);
+    MaterialInfo mi = materials[imageLoad(g_ids, pixel).y];
+    vec4 base_color = imageLoad(g_base_color, pixel);
+    px.m = BrdfInput(base_color.rgb, mr.x, mr.y, dielectric_f0(mi.ior));
+    px.ior = mi.ior;
+    px.thin = mi.thickness <= 0.0;
+    px.absorption = px.thin ? vec3(0.0) : volume_absorption(mi);
     // Glass: what it lets through goes to out_let_through (composite leaves its share out of
-    // the diffuse lobe). Opaque surfaces draw no numbers for it: their streams are as before.
-    float transmitted = mr.w * (1.0 - m.metallic);
-    float seen_at = 0.0;
-    vec3 through = transmitted > 0.0 ? transmitted * transmitted_radiance(p, n, ng, v, depth, m, mi, rng, seen_at) : vec3(0.0);
-    // A blended surface covers the share alpha of the pixel (composite scales its own light by
-    // it); the rest shows what lies behind, added here.
-    float cover = 1.0;
-    vec3 behind = vec3(0.0);
-    float behind_at = 0.0;
-    if ((mi.flags & MATERIAL_BLEND) != 0u) {
-        cover = imageLoad(g_base_color, px).a;
-        if (cover < 1.0) behind = (1.0 - cover) * behind_blend(p, ng, v, depth, rng, behind_at);
+    // the diffuse lobe). A blended surface covers the share alpha of the pixel (composite scales
+    // its own light by it); the rest shows what lies behind, also let through.
+    px.transmitted = mr.w * (1.0 - px.m.metallic);
+    px.cover = (mi.flags & MATERIAL_BLEND) != 0u ? base_color.a : 1.0;
+    px.origin = offset_ray_origin(px.p, px.ng, px.depth);
+    bool reflects = px.m.roughness <= params.roughness_cutoff;
+    // The area lights' share of the light table: 0 where there are none (or on a mirror, whose
+    // lobe no light sample can hit), and then no numbers are drawn for them.
+    px.area_share = reflects && px.m.roughness >= MIRROR_ROUGHNESS ? area_light_share() : 0.0;
+    Rng rng = rng_init(uvec2(pixel), frame.frame_index, params.seed ^ SALT_REFLECTIONS);
+
+    // The jobs, in order: the path through glass and its light samples, the view ray past a
+    // blend, then per reflection ray its area-light sample and the ray. Opaque surfaces draw no
+    // numbers for the first two.
+    uint glass_jobs = px.transmitted > 0.0 ? 1u + glass_light_samples(px) : 0u;
+    uint blend_jobs = px.cover < 1.0 ? 1u : 0u;
+    uint count = max(params.rays, 1u);
+    uint jobs = glass_jobs + blend_jobs + (reflects ? 2u * count : 0u);
+
+    vec3 found[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));  // by target
+    float seen_at = 0.0, behind_at = 0.0;  // where along the view ray each was seen
+    float dist_sum = 0.0, hits = 0.0;      // the reflection rays' hit distances
+    Ray ray;
+    bool tracing = false;
+    uint job = 0u;
+    [[dont_unroll]] while (tracing || job < jobs) {
+        if (!tracing) {
+            if (job < glass_jobs) {
+                tracing = job == 0u ? start_glass_path(px, ray, rng) : start_glass_light(px, job - 1u, ray, rng);
+            } else if (job < glass_jobs + blend_jobs) {
+                ray = ray_new(RAY_BLEND, TO_BEHIND, offset_ray_origin(px.p, -px.ng, px.depth), -px.v, 1e6, vec3(1.0 - px.cover));
+                tracing = true;
+            } else if (((job - glass_jobs - blend_jobs) & 1u) == 0u) {
+                tracing = px.area_share > 0.0 && start_area_light(px, ray, rng);
+            } else {
+                tracing = start_reflection(px, ray, rng);
+            }
+            ++job;
+            continue;
+        }
+        Hit h = trace_ray(ray.origin, ray.dir, 0.0, ray.tmax, RAY_MASK_ALL, ray.kind == RAY_SHADOW);
+        if (ray.kind == RAY_SHADOW || h.instance == NO_HIT) {
+            tracing = false;
+            if (ray.kind == RAY_SHADOW) {
+                if (h.instance == NO_HIT) found[ray.target] += ray.weight * hit_transmittance;
+                continue;
+            }
+            // Escaped: the environment, weighted against the area-light sample for a glossy lobe.
+            bool mis = ray.kind == RAY_REFLECT && px.area_share > 0.0;
+            float w = mis ? mis_power(ray.pdf, light_pdf_environment(ray.dir) / px.area_share) : 1.0;
+            found[ray.target] += ray.weight * env_eval(ray.dir) * w;
+            continue;
+        }
+        ray.travelled += h.t;
+        HitSurface s = hit_surface(h.instance, h.primitive, h.bary, ray.dir);
+        float through = s.mat.transmission * (1.0 - s.mat.metallic);
+        bool volume = materials[s.material].thickness > 0.0;
+        // What the hit does: shade it (with this weight on its emission), and where the ray
+        // goes on (`tracing`, and after shading a glass event where `glass_next`).
+        bool shade = true, glass_next = false;
+        float emission_weight = 1.0;
+        if (ray.kind == RAY_REFLECT) {
+            if (ray.steps < PASS_THROUGH_MAX && pass_through(s, ray.dir, ray.weight, rng)) {
+                ++ray.steps;
+                ray.origin = offset_ray(s.position, -s.normal_geo);
+                continue;
+            }
+            if (px.area_share > 0.0) {
+                float light_pdf = light_pdf_emitter(h.instance, h.primitive, px.origin, s.position);
+                emission_weight = mis_power(ray.pdf, light_pdf / px.area_share);
+            }
+            dist_sum += ray.travelled;
+            hits += 1.0;
+            // A volume of glass shows what it reflects (shaded here) and what comes through it.
+            glass_next = through > 0.0 && volume && s.front;
+            ray.steps = 0u;
+        } else if (ray.kind == RAY_BLEND) {
+            bool blended = (materials[s.material].flags & MATERIAL_BLEND) != 0u;
+            if (blended && ray.steps + 1u < BLEND_LAYERS && rng_next(rng) >= s.mat.base_color.a) {
+                ++ray.steps;
+                ray.origin = offset_ray(s.position, -s.normal_geo);
+                continue;
+            }
+            behind_at = ray.travelled;
+        } else {
+            if (any(greaterThan(ray.absorption, vec3(0.0)))) ray.weight *= exp(-ray.absorption * h.t);
+            // Every surface sends back all it reflects, glass included (the light it does not
+            // let through; the path goes on with what it does). A volume's inner side reflects
+            // by its interface event instead, and only its emission is added here.
+            bool inner_side = volume && !s.front;
+            shade = through <= 0.0 || !inner_side;
+            if (!shade && emitter_visible_side(h.instance, h.primitive, ray.dir)) found[ray.target] += ray.weight * s.mat.emissive;
+            glass_next = through > 0.0;
+            // Where the path stops, what it saw lies (near enough) on the view ray's line if
+            // the glass did not turn it: through thin glass, or out of a volume in the
+            // direction it went in (a slab shifts the line a little). 0 for a lens.
+            if (!glass_next && ray.target == TO_GLASS) seen_at = ray.thin || dot(ray.dir, -px.v) > UNTURNED_COS ? ray.travelled : 0.0;
+        }
+        if (shade) found[ray.target] += ray.weight * shade_hit(h, s, ray.dir, emission_weight, rng);
+        tracing = glass_next && glass_event(ray, s, rng);
     }
+
     // What the pixel shows through the surface, and where its history is: that of the larger
     // of what lies behind a blend and what comes through the glass.
     if (params.let_through != 0u) {
-        float at = luminance(behind) >= luminance(cover * through) ? behind_at : seen_at;
-        imageStore(out_let_through, px, vec4(cover * through + behind, at));
+        vec3 glass = found[TO_GLASS], behind = found[TO_BEHIND];
+        float at = luminance(behind) >= luminance(glass) ? behind_at : seen_at;
+        imageStore(out_let_through, pixel, vec4(glass + behind, at));
     }
-
-    if (m.roughness > params.roughness_cutoff) {
-        imageStore(out_radiance, px, vec4(cover * imageLoad(in_specular, px).rgb, 1.0));
-        imageStore(out_hit_distance, px, vec4(0.0));
-        return;
-    }
-    vec3 origin = offset_ray_origin(p, ng, depth);
-    mat3 basis = orthonormal_basis(n);
-    vec3 v_local = vec3(dot(v, basis[0]), dot(v, basis[1]), n_dot_v);
-    float alpha = ggx_alpha(m.roughness);
-    uint count = max(params.rays, 1u);
-    bool mirror = m.roughness < MIRROR_ROUGHNESS;
-    // The area lights' share of the light table: 0 where there are none (or on a mirror, whose
-    // lobe no light sample can hit), and then no numbers are drawn for them and the streams are
-    // as before.
-    float area_share = mirror ? 0.0 : area_light_share();
-    vec3 sum = vec3(0.0);
-    float dist_sum = 0.0, hits = 0.0;
-    for (uint i = 0u; i < count; ++i) {
-        if (area_share > 0.0) sum += area_light_estimate(origin, n, ng, v, m, area_share, rng);
-        vec3 l, weight;
-        float pdf = 0.0;  // the ray's solid-angle density (0: a mirror's delta lobe)
-        if (mirror) {
-            l = reflect(-v, n);
-            weight = fresnel_schlick(f0, n_dot_v);
-        } else {
-            // Visible-normal sampling: the estimate f cos / pdf of the GGX lobe reduces to
-            // F(v.h) G2(v, l) / G1(v).
-            vec3 h_local = sample_ggx_vndf(v_local, alpha, rng_next2(rng));
-            vec3 l_local = reflect(-v_local, h_local);
-            if (l_local.z <= 0.0) continue;
-            l = normalize(basis * l_local);
-            vec3 h = normalize(basis * h_local);
-            float n_dot_l = l_local.z;
-            float g2 = smith_visibility(n_dot_l, n_dot_v, alpha) * 4.0 * n_dot_l * n_dot_v;
-            weight = fresnel_schlick(f0, dot(v, h)) * g2 / ggx_g1(n_dot_v, alpha);
-            pdf = ggx_vndf_pdf(n_dot_v, h_local.z, alpha);
-        }
-        if (dot(l, ng) <= 0.0) continue;
-        // Straight on through see-through surfaces (a window seen in a mirror shows what lies
-        // behind it); the hit distance runs to where the ray stops.
-        HitSurface s;
-        float travelled;
-        Hit h = trace_closest_through(origin, l, weight, rng, s, travelled);
-        if (h.instance == NO_HIT) {
-            float w = area_share > 0.0 ? mis_power(pdf, light_pdf_environment(l) / area_share) : 1.0;
-            sum += weight * env_eval(l) * w;
-        } else {
-            float w = area_share > 0.0 ? mis_power(pdf, light_pdf_emitter(h.instance, h.primitive, origin, s.position) / area_share) : 1.0;
-            sum += weight * shade_hit(h, s, l, w, rng);
-            dist_sum += travelled;
-            hits += 1.0;
-        }
-    }
-    vec3 reflected = sum / float(count);
-    imageStore(out_radiance, px, vec4(cover * (reflected + imageLoad(in_specular, px).rgb), 1.0));
-    imageStore(out_hit_distance, px, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
+    vec3 specular = imageLoad(in_specular, pixel).rgb;
+    vec3 reflected = reflects ? found[TO_REFLECTION] / float(count) : vec3(0.0);
+    imageStore(out_radiance, pixel, vec4(px.cover * (reflected + specular), 1.0));
+    imageStore(out_hit_distance, pixel, vec4(hits > 0.0 ? dist_sum / hits : 0.0));
 }
