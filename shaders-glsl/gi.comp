@@ -26,7 +26,8 @@
 //   where last frame's choice, lit then, is now in shadow (an occluder the frame was not told
 //   of), what it brought goes to gi.light_lost, so that the denoiser and TAA let go of it too;
 // - indirect light (the bounce ray goes straight on through see-through surfaces, as the light
-//   sample's shadow ray does: common/pass_through.glsl): at the bounce ray's hit, next-event
+//   sample's shadow ray does, and through volumes of glass: common/pass_through.glsl): at the
+//   bounce ray's hit, next-event
 //   estimation toward a light chosen by power (any kind, with a shadow ray), and the light that
 //   surface reflects from other surfaces from the radiance cache (every further bounce); with
 //   `bounces` > 1 the path first continues by BSDF sampling, with a light sample at each
@@ -151,8 +152,8 @@ vec2 shade(ivec2 px) {
     //   2: last frame's resampled light, re-tested where it wins the merge;
     //   3: the bounce, cosine-weighted about the shading normal, kept above the geometric
     //      surface (nothing to gather for a smooth metal, which is here only for the resampled
-    //      lights), straight on through see-through surfaces as the shadow rays go (each one
-    //      it passes sends it round again).
+    //      lights), straight on through see-through surfaces as the shadow rays go, and into
+    //      and out of volumes of glass (pass_on; each surface it passes sends it round again).
     ShadingPoint sp = ShadingPoint(origin, n, ng, v, m, rough);
     LightReservoir r = reservoir_empty();
     LightReservoir prev = reservoir_empty();
@@ -166,9 +167,7 @@ vec2 shade(ivec2 px) {
     bool env_lit = light_table.entry_count > 0u && light_entries[light_table.env_entry].pmf > 0.0;
     vec3 dir = vec3(0.0);           // the bounce's direction
     float pdf = 0.0;                // and its density
-    vec3 from = origin;             // where its next segment starts
-    vec3 through = vec3(1.0);       // what the surfaces it passed let through
-    uint crossed = 0u;
+    Passage way = passage_start(origin, dir);  // its way past see-through surfaces and glass
     Hit bounce_hit;                 // where it stopped (NO_HIT: escaped, or not traced)
     bounce_hit.instance = NO_HIT;
     HitSurface s;
@@ -176,14 +175,16 @@ vec2 shade(ivec2 px) {
         NeeSample ls = nee_none();
         float cos_l = 0.0;
         bool traced = true;
-        vec3 o = from, d = dir;
+        vec3 o = way.from, d = way.dir;
         float tmax = 1e6;
         if (k == 3u) {
-            if (crossed == 0u) {
-                d = dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
+            if (way.steps == 0u) {
+                way.dir = dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
                 pdf = max(dot(n, dir), 0.0) * INV_PI;
                 if (!((diffuse || rough) && dot(dir, ng) > 0.0 && pdf > 0.0)) break;
             }
+            o = way.from;
+            d = way.dir;
         } else {
             if (k == 0u) {
                 // The numbers are drawn either way, so scenes without an environment keep their
@@ -215,12 +216,8 @@ vec2 shade(ivec2 px) {
         if (k == 3u) {
             bounce_hit = h;
             if (h.instance == NO_HIT) break;
-            s = hit_surface(h.instance, h.primitive, h.bary, dir);
-            if (crossed < PASS_THROUGH_MAX && pass_through(s, dir, through, rng)) {
-                ++crossed;
-                from = offset_ray(s.position, -s.normal_geo);
-                --k;  // the loop's increment brings it back to the bounce
-            }
+            s = hit_surface(h.instance, h.primitive, h.bary, way.dir);
+            if (pass_on(s, h.t, way, rng)) --k;  // the loop's increment brings it back to the bounce
             continue;
         }
         // What passes the see-through surfaces on the way scales the sample.
@@ -266,22 +263,26 @@ vec2 shade(ivec2 px) {
     if (pdf > 0.0 && dot(dir, ng) > 0.0 && (diffuse || rough)) {
         vec3 lobe = brdf_diffuse_weight(m, n, v, dir);
         vec3 bounce = vec3(0.0);
-        // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself.
+        // With cosine sampling, the Lambert lobe's (1/pi) L cos / pdf is L itself. Past a volume
+        // of glass, which no light sample crosses, the sky and the emitters count as they would
+        // if one did: the light sample's share is left out there, and with it the light that
+        // glass focuses from a sun or a small emitter (a caustic, which one sample a pixel would
+        // show as a blob after the denoiser; the reference has it).
         if (bounce_hit.instance == NO_HIT) {
-            bounce = env_eval(dir) * (env_lit ? mis_power(pdf, env_pdf(dir)) : 1.0);
+            bounce = env_eval(way.dir) * (env_lit ? mis_power(pdf, env_pdf(way.dir)) : 1.0);
         } else {
             // An emitter the reservoirs can draw is theirs; one they cannot (no power in the
             // table) only this ray finds.
-            if (emitter_visible_side(bounce_hit.instance, bounce_hit.primitive, dir) &&
+            if (emitter_visible_side(bounce_hit.instance, bounce_hit.primitive, way.dir) &&
                 !(light_pdf_emitter(bounce_hit.instance, bounce_hit.primitive, origin, s.position) > 0.0)) {
                 bounce += s.mat.emissive;
             }
             uint traced = max(params.bounces, 1u);
             uint vertices = rc.enabled != 0u ? max(traced, RC_VERTICES) : traced;
-            bounce += rc_radiance_leaving(s, dir, bounce_hit.t, traced - 1u, vertices, true,
+            bounce += rc_radiance_leaving(s, way.dir, bounce_hit.t, traced - 1u, vertices, true,
                                           rc_copy_written(frame.frame_index), rng);
         }
-        bounce *= through;
+        bounce *= way.weight;
         l_sum += lobe * bounce;
         if (rough) spec_sum += bounce * brdf_eval_specular_cos(m, n, v, dir) / pdf;
     }

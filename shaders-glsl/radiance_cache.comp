@@ -166,11 +166,17 @@ void update(uint slot) {
         vec3 dir = orthonormal_basis(n) * sample_cosine_hemisphere(rng_next2(rng));
         vec3 estimate = vec3(0.0);
         if (dot(dir, n) > 0.0) {
-            // Straight on through see-through surfaces, like every ray of the paths.
-            vec3 passed = vec3(1.0);
+            // Straight on through see-through surfaces and through glass, like every ray of the
+            // paths. The sky past a volume of glass is the cell's too, since the querying
+            // vertex's light sample does not cross one: at the weight it would take against a
+            // light sample that did (a sun's caustic left out, as in gi).
+            Passage way = passage_start(origin, dir);
             HitSurface s;
             float travelled;
-            Hit h = trace_closest_through(origin, dir, passed, rng, s, travelled);
+            Hit h = trace_closest_through(way, rng, s, travelled);
+            if (h.instance == NO_HIT && way.turned) {
+                estimate = way.weight * env_eval(way.dir) * mis_power(max(dot(n, dir), 0.0) * INV_PI, env_pdf(way.dir));
+            }
             if (h.instance != NO_HIT) {
                 // Cosine sampling: (1/pi) L cos / pdf is L.
                 // A young cell (or any, right after the lights changed) traces its path deep
@@ -178,7 +184,7 @@ void update(uint slot) {
                 // light would stay in its mean for the whole window.
                 bool deep = relit || mean.a < RC_YOUNG_SAMPLES;
                 uint vertices = deep ? RC_VERTICES_DEEP : RC_VERTICES;
-                estimate = passed * rc_radiance_leaving(s, dir, h.t, deep ? vertices : 0u, vertices, false, read, rng);
+                estimate = way.weight * rc_radiance_leaving(s, way.dir, h.t, deep ? vertices : 0u, vertices, false, read, rng);
                 sampled = true;
             }
         }

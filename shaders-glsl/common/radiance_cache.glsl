@@ -344,7 +344,7 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
         // Glass reflects only the light it does not let through: its diffuse lobe shrinks by
         // the transmitted share (exactly so for a dielectric; a transmissive metal's F0 tint
         // shrinks with it). What thin glass lets through, the BRDF-sampled ray below follows
-        // (pass_through); a volume's is not followed on these paths.
+        // (pass_on), into and out of a volume too.
         vec3 base = s.mat.base_color.rgb * (1.0 - s.mat.transmission);
         BrdfInput m = BrdfInput(base, s.mat.metallic, s.mat.roughness, dielectric_f0(s.mat.ior));
         vec3 v = -dir;
@@ -378,10 +378,9 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
         Hit next;
         next.instance = NO_HIT;
         HitSurface next_surface;
-        // The BRDF-sampled ray goes straight on through see-through surfaces (by this site
-        // again: `from` moves behind each), scaled by what passes.
-        vec3 from = leave, passed = vec3(1.0);
-        uint crossed = 0u;
+        // The BRDF-sampled ray goes straight on through see-through surfaces and through
+        // volumes of glass (by this site again: `way` moves past each), scaled by what passes.
+        Passage way = passage_start(leave, bs.l);
         [[dont_unroll]] for (uint ray = RC_RAY_LIGHT; ray <= RC_RAY_NEXT; ++ray) {
             vec3 o = leave, d = ls.dir;
             float tmax = shadow_ray_tmax(ls.dist);
@@ -394,8 +393,8 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                 tmax = cached.len;
             } else {
                 if (answered || !scatters || vertex + 1u == vertices) break;
-                o = from;
-                d = bs.l;
+                o = way.from;
+                d = way.dir;
                 tmax = 1e6;
             }
             // Light and cell rays cross see-through surfaces, scaled by what passes them.
@@ -431,21 +430,27 @@ vec3 rc_radiance_leaving(HitSurface s, vec3 dir, float t, uint first_cached, uin
                 traced_next = true;
                 if (h.instance == NO_HIT) continue;
                 next_surface = hit_surface(h.instance, h.primitive, h.bary, d);
-                if (crossed < PASS_THROUGH_MAX && pass_through(next_surface, d, passed, rng)) {
-                    ++crossed;
-                    from = offset_ray(next_surface.position, -next_surface.normal_geo);
-                    --ray;  // the loop's increment brings it back to RC_RAY_NEXT
-                }
+                if (pass_on(next_surface, h.t, way, rng)) --ray;  // the loop's increment brings it back to RC_RAY_NEXT
             }
         }
-        specular_carry *= passed;
+        specular_carry *= way.weight;
         if (next.instance == NO_HIT) {
-            // Only a traced ray escapes: the environment, seen through a specular lobe.
-            if (traced_next) radiance += specular_carry * env_eval(bs.l);
+            // Only a traced ray escapes: the environment, seen through a specular lobe. Past a
+            // volume of glass, which the light sample does not cross, the rest of the sky comes
+            // through the other lobe too, at the weight it would take against a light sample
+            // that did (what glass focuses from a sun is left out, as in gi).
+            if (traced_next) {
+                vec3 sky = env_eval(way.dir);
+                radiance += specular_carry * sky;
+                if (way.turned) {
+                    vec3 rest = throughput * bs.weight * way.weight - specular_carry;
+                    radiance += rest * sky * mis_power(bs.pdf, env_pdf(way.dir));
+                }
+            }
             break;
         }
-        throughput *= bs.weight * passed;
-        dir = bs.l;
+        throughput *= bs.weight * way.weight;
+        dir = way.dir;
         t = next.t;
         s = next_surface;
         if (emitter_visible_side(next.instance, next.primitive, dir)) radiance += specular_carry * s.mat.emissive;
